@@ -1,0 +1,312 @@
+//! The sweep (paper, Section 2.1 and Figure 1): one right-hand-side evaluation in a single
+//! pass along x. Pairs are found slab by slab; the three SPH sums (density → first
+//! derivatives → right-hand sides) run on a slab's pairs as soon as every particle they touch
+//! has finished the previous sum; a slab's pairs are dropped once its force sum is done. The
+//! full pair list never exists: the window holds a few slabs' pairs.
+//!
+//! A particle's state ("U", "Dens", "1.", "RHS" in Figure 1) is the number of sums finished
+//! for its slab. Ghosts finish when their owners do; contributions gathered at periodic ghosts
+//! are folded into their owners first. With a periodic x axis the first slabs wait for the
+//! last one (the sweep is a ring), which the dependency rules below handle without a special
+//! case.
+
+pub mod local;
+pub mod pairs;
+pub mod reference;
+
+use crate::boundary::SimBox;
+use crate::kernel::Kernel;
+use crate::particles::Particles;
+use crate::physics::artificial_viscosity::{ArtificialViscosity, balsara_factor};
+use crate::physics::eos::Eos;
+use local::{Local, Work};
+use pairs::{BYTES_PER_PAIR, PairBlock};
+
+/// The physics one evaluation needs.
+#[derive(Clone, Copy, Debug)]
+pub struct Physics<const D: usize> {
+    pub kernel: Kernel<D>,
+    pub eos: Eos,
+    pub av: ArtificialViscosity,
+}
+
+/// Figures of one evaluation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SweepStats {
+    /// Pairs found (each once).
+    pub pairs: u64,
+    /// Largest number of pairs held in the window at once.
+    pub peak_pairs: usize,
+    /// Bytes the window held at its peak.
+    pub peak_window_bytes: usize,
+    pub ghosts: usize,
+    pub slabs: usize,
+}
+
+/// How long the window keeps pairs: `Sweep` drops a slab's pairs once its force sum is done
+/// (the paper's algorithm); `FullList` keeps every pair to the end, the memory behaviour of
+/// a stored full pair list, for comparison.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Window {
+    #[default]
+    Sweep,
+    FullList,
+}
+
+/// The three sums, in order. A stage number counts the sums finished.
+const DENSITY: u8 = 1;
+const GRADIENT: u8 = 2;
+const FORCE: u8 = 3;
+
+/// Dependency tables of the slabs, from where ghosts lie relative to their owners.
+struct Dependencies {
+    /// Slabs holding ghosts of this slab's particles (their pairs must be finished too).
+    ghost_slabs: Vec<Vec<usize>>,
+    /// Slabs holding owners of ghosts in this slab.
+    owner_slabs: Vec<Vec<usize>>,
+    /// Local indices of the ghosts whose owner lies in this slab.
+    ghosts_of: Vec<Vec<u32>>,
+}
+
+impl Dependencies {
+    fn new<const D: usize>(local: &Local<D>) -> Self {
+        let ns = local.num_slabs();
+        let mut dep = Self {
+            ghost_slabs: vec![Vec::new(); ns],
+            owner_slabs: vec![Vec::new(); ns],
+            ghosts_of: vec![Vec::new(); ns],
+        };
+        for k in 0..local.len() {
+            if !local.is_ghost[k] {
+                continue;
+            }
+            let (sg, so) = (local.slab_of(k), local.slab_of(local.owner[k] as usize));
+            dep.ghosts_of[so].push(k as u32);
+            if sg != so {
+                if !dep.ghost_slabs[so].contains(&sg) {
+                    dep.ghost_slabs[so].push(sg);
+                }
+                if !dep.owner_slabs[sg].contains(&so) {
+                    dep.owner_slabs[sg].push(so);
+                }
+            }
+        }
+        dep
+    }
+}
+
+/// Evaluates density, velocity gradient, accelerations and du/dt of every real particle by
+/// one sweep, writing them into `parts`.
+pub fn evaluate<const D: usize>(
+    parts: &mut Particles<D>,
+    bx: &SimBox<D>,
+    phys: &Physics<D>,
+    window: Window,
+) -> SweepStats {
+    let local = Local::build(parts, bx, phys.kernel.support());
+    let mut local = local;
+    let mut work = vec![Work::<D>::default(); local.len()];
+    let deps = Dependencies::new(&local);
+    let ns = local.num_slabs();
+    let mut blocks: Vec<Option<PairBlock>> = (0..ns).map(|_| None).collect();
+    let mut pair_stage = vec![0u8; ns];
+    let mut slab_stage = vec![0u8; ns];
+    let mut stats = SweepStats {
+        ghosts: local.num_ghosts(),
+        slabs: ns,
+        ..Default::default()
+    };
+    let mut live_pairs = 0usize;
+
+    let pairs_done = |pair_stage: &[u8], s: usize, k: u8| {
+        pair_stage[s] >= k && (s + 1 >= ns || pair_stage[s + 1] >= k)
+    };
+
+    // Slabs touched but not yet finished (small: the window, plus the first slabs of a
+    // periodic x axis that wait for the last).
+    let mut pending: Vec<usize> = Vec::new();
+    for s in 0..=ns {
+        if s < ns {
+            let block = PairBlock::find(&local, &phys.kernel, s);
+            block.density(&local, &mut work);
+            stats.pairs += block.len() as u64;
+            live_pairs += block.len();
+            stats.peak_pairs = stats.peak_pairs.max(live_pairs);
+            blocks[s] = Some(block);
+            pair_stage[s] = DENSITY;
+            pending.push(s);
+        }
+        // Advance every block and slab as far as the dependencies allow.
+        loop {
+            let mut progress = false;
+            for &t in &pending {
+                let next = slab_stage[t] + 1;
+                if next > FORCE {
+                    continue;
+                }
+                let ready = pairs_done(&pair_stage, t, next)
+                    && deps.ghost_slabs[t]
+                        .iter()
+                        .all(|&g| pairs_done(&pair_stage, g, next))
+                    && deps.owner_slabs[t].iter().all(|&o| slab_stage[o] >= next);
+                if ready {
+                    finish_slab(&mut local, &mut work, &deps, phys, t, next);
+                    slab_stage[t] = next;
+                    progress = true;
+                }
+            }
+            for &t in &pending {
+                let next = pair_stage[t] + 1;
+                if next > FORCE {
+                    continue;
+                }
+                let ready = slab_stage[t] >= next - 1 && (t == 0 || slab_stage[t - 1] >= next - 1);
+                if !ready {
+                    continue;
+                }
+                let block = blocks[t].as_ref().expect("live block");
+                if next == GRADIENT {
+                    block.gradient(&local, &mut work);
+                } else {
+                    block.force(&local, &phys.av, &mut work);
+                    if window == Window::Sweep {
+                        live_pairs -= block.len();
+                        blocks[t] = None;
+                    }
+                }
+                pair_stage[t] = next;
+                progress = true;
+            }
+            pending.retain(|&t| slab_stage[t] < FORCE || pair_stage[t] < FORCE);
+            if !progress {
+                break;
+            }
+        }
+    }
+    assert!(
+        slab_stage.iter().all(|&s| s == FORCE),
+        "sweep left slabs unfinished: a dependency cycle"
+    );
+    stats.peak_window_bytes = stats.peak_pairs * BYTES_PER_PAIR;
+    write_back(parts, &local, &work);
+    stats
+}
+
+/// A slab has finished stage `stage` for all its particles: fold the periodic ghosts' part
+/// into their owners, complete the owners' quantities, and copy them to every ghost.
+fn finish_slab<const D: usize>(
+    local: &mut Local<D>,
+    work: &mut [Work<D>],
+    deps: &Dependencies,
+    phys: &Physics<D>,
+    t: usize,
+    stage: u8,
+) {
+    let ghosts = &deps.ghosts_of[t];
+    for &g in ghosts {
+        let g = g as usize;
+        if local.fold[g] {
+            let o = local.owner[g] as usize;
+            let (wg, s) = (work[g], local.sign[g]);
+            let wo = &mut work[o];
+            match stage {
+                DENSITY => {
+                    wo.rho += wg.rho;
+                    wo.interactions += wg.interactions;
+                }
+                GRADIENT => {
+                    for a in 0..D {
+                        for b in 0..D {
+                            wo.grad[a][b] += s[a] * s[b] * wg.grad[a][b];
+                        }
+                    }
+                }
+                _ => {
+                    for d in 0..D {
+                        wo.acc[d] += s[d] * wg.acc[d];
+                    }
+                    wo.du += wg.du;
+                    wo.diss += wg.diss;
+                    wo.vsig = wo.vsig.max(wg.vsig);
+                }
+            }
+        }
+    }
+    let h = phys.kernel.h();
+    for k in local.slab_range(t) {
+        if local.is_ghost[k] {
+            continue;
+        }
+        match stage {
+            DENSITY => {
+                let rho = work[k].rho + local.mass[k] * phys.kernel.w0();
+                let (p, cs) = phys.eos.pressure_sound_speed(rho, local.u[k]);
+                local.rho[k] = rho;
+                local.p[k] = p;
+                local.cs[k] = cs;
+            }
+            GRADIENT => {
+                local.vgrad[k] = work[k].grad;
+                if phys.av.balsara {
+                    local.balsara[k] = balsara_factor(&local.vgrad[k], local.cs[k], h);
+                }
+            }
+            _ => {}
+        }
+    }
+    for &g in ghosts {
+        let g = g as usize;
+        let o = local.owner[g] as usize;
+        match stage {
+            DENSITY => {
+                local.rho[g] = local.rho[o];
+                local.p[g] = local.p[o];
+                local.cs[g] = local.cs[o];
+            }
+            GRADIENT => {
+                let s = local.sign[g];
+                local.vgrad[g] = std::array::from_fn(|a| {
+                    std::array::from_fn(|b| s[a] * s[b] * local.vgrad[o][a][b])
+                });
+                local.balsara[g] = local.balsara[o];
+            }
+            _ => {}
+        }
+    }
+}
+
+fn write_back<const D: usize>(parts: &mut Particles<D>, local: &Local<D>, work: &[Work<D>]) {
+    for k in 0..local.len() {
+        if local.is_ghost[k] {
+            continue;
+        }
+        let i = local.src[k] as usize;
+        let w = &work[k];
+        parts.rho[i] = local.rho[k];
+        parts.p[i] = local.p[k];
+        parts.cs[i] = local.cs[k];
+        for a in 0..D {
+            parts.acc[a][i] = w.acc[a];
+            for b in 0..D {
+                parts.vgrad[a][b][i] = local.vgrad[k][a][b];
+            }
+        }
+        parts.du[i] = w.du;
+        parts.diss[i] = w.diss;
+        parts.vsig[i] = w.vsig.max(2.0 * local.cs[k]);
+        parts.interactions[i] = w.interactions;
+    }
+}
+
+/// Every pair the sweep's blocks find, as (i, j) local indices, slab by slab (for tests and
+/// diagnostics; the sweep itself never holds them all).
+pub fn all_pairs<const D: usize>(local: &Local<D>, kernel: &Kernel<D>) -> Vec<(u32, u32)> {
+    (0..local.num_slabs())
+        .flat_map(|s| {
+            PairBlock::find(local, kernel, s)
+                .pairs
+                .into_iter()
+                .map(|p| (p.i, p.j))
+        })
+        .collect()
+}

@@ -1,0 +1,140 @@
+//! Straightforward references for the sweep, used by its tests: every pair by brute force,
+//! and the three sums from a full pair list with minimum-image distances (no ghosts, no
+//! window), written independently of the sweep's bookkeeping.
+
+use crate::boundary::{BoundaryKind, SimBox};
+use crate::particles::Particles;
+use crate::physics::artificial_viscosity::balsara_factor;
+use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
+use crate::sweep::Physics;
+use crate::sweep::local::Local;
+
+/// Every (i, j), j < i, of the local set (reals and ghosts, no ghost–ghost pair) closer than
+/// the support, by testing all N² pairs.
+pub fn brute_force_pairs<const D: usize>(local: &Local<D>, support: f64) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    for i in 0..local.len() {
+        for j in 0..i {
+            if local.is_ghost[i] && local.is_ghost[j] {
+                continue;
+            }
+            let r2: f64 = (0..D)
+                .map(|d| (local.pos[d][i] - local.pos[d][j]).powi(2))
+                .sum();
+            if r2 < support * support {
+                out.push((i as u32, j as u32));
+            }
+        }
+    }
+    out
+}
+
+/// Separation r_i − r_j under the minimum-image convention on periodic axes.
+fn min_image<const D: usize>(bx: &SimBox<D>, parts: &Particles<D>, i: usize, j: usize) -> [f64; D] {
+    std::array::from_fn(|d| {
+        let mut dx = parts.pos[d][i] - parts.pos[d][j];
+        if bx.kinds[d] == BoundaryKind::Periodic {
+            let l = bx.length(d);
+            dx -= l * (dx / l).round();
+        }
+        dx
+    })
+}
+
+/// Density, velocity gradient, acceleration and du/dt from a stored list of all pairs, for
+/// boxes whose axes are periodic or open (no mirror walls).
+pub fn full_list_minimum_image<const D: usize>(
+    parts: &mut Particles<D>,
+    bx: &SimBox<D>,
+    phys: &Physics<D>,
+) {
+    assert!(
+        bx.kinds.iter().all(|&k| k != BoundaryKind::Reflecting),
+        "the reference handles periodic and open axes"
+    );
+    let n = parts.len();
+    let support = phys.kernel.support();
+    let mut list = Vec::new();
+    for i in 0..n {
+        for j in 0..i {
+            let dx = min_image(bx, parts, i, j);
+            let r = dx.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if r < support {
+                list.push((i, j, dx, r));
+            }
+        }
+    }
+    for i in 0..n {
+        parts.rho[i] = parts.mass[i] * phys.kernel.w0();
+        parts.interactions[i] = 0;
+    }
+    for &(i, j, _, r) in &list {
+        let w = phys.kernel.w(r);
+        parts.rho[i] += parts.mass[j] * w;
+        parts.rho[j] += parts.mass[i] * w;
+        parts.interactions[i] += 1;
+        parts.interactions[j] += 1;
+    }
+    let mut balsara = vec![1.0; n];
+    for i in 0..n {
+        let (p, cs) = phys.eos.pressure_sound_speed(parts.rho[i], parts.u[i]);
+        parts.p[i] = p;
+        parts.cs[i] = cs;
+        for a in 0..D {
+            for b in 0..D {
+                parts.vgrad[a][b][i] = 0.0;
+            }
+            parts.acc[a][i] = 0.0;
+        }
+        parts.du[i] = 0.0;
+        parts.diss[i] = 0.0;
+    }
+    for &(i, j, dx, r) in &list {
+        let g = gradient_pair(
+            &dx,
+            phys.kernel.f(r),
+            &parts.velocity(i),
+            &parts.velocity(j),
+        );
+        let (si, sj) = (parts.mass[j] / parts.rho[j], parts.mass[i] / parts.rho[i]);
+        for a in 0..D {
+            for b in 0..D {
+                parts.vgrad[a][b][i] += si * g[a][b];
+                parts.vgrad[a][b][j] += sj * g[a][b];
+            }
+        }
+    }
+    if phys.av.balsara {
+        for (i, b) in balsara.iter_mut().enumerate() {
+            let v: [[f64; D]; D] =
+                std::array::from_fn(|a| std::array::from_fn(|c| parts.vgrad[a][c][i]));
+            *b = balsara_factor(&v, parts.cs[i], phys.kernel.h());
+        }
+    }
+    let side = |parts: &Particles<D>, k: usize| ForceSide {
+        v: parts.velocity(k),
+        rho: parts.rho[k],
+        p: parts.p[k],
+        cs: parts.cs[k],
+        balsara: balsara[k],
+    };
+    for &(i, j, dx, r) in &list {
+        let pf = force_pair(
+            &dx,
+            r,
+            phys.kernel.f(r),
+            &side(parts, i),
+            &side(parts, j),
+            &phys.av,
+        );
+        let (mi, mj) = (parts.mass[i], parts.mass[j]);
+        for d in 0..D {
+            parts.acc[d][i] += mj * pf.accel[d];
+            parts.acc[d][j] -= mi * pf.accel[d];
+        }
+        parts.du[i] += mj * (pf.heat_pressure + pf.heat_viscous);
+        parts.du[j] += mi * (pf.heat_pressure + pf.heat_viscous);
+        parts.diss[i] += mj * pf.heat_viscous;
+        parts.diss[j] += mi * pf.heat_viscous;
+    }
+}

@@ -1,0 +1,184 @@
+//! Guards the sweep (paper, Section 2.1): on random, clustered and periodic particle sets it
+//! finds exactly the pairs a brute-force search finds, and its three sums equal a
+//! straightforward full-pair-list evaluation (minimum-image distances, no ghosts) to round-off.
+
+use sphdisk::boundary::{BoundaryKind, SimBox};
+use sphdisk::kernel::Kernel;
+use sphdisk::particles::Particles;
+use sphdisk::physics::artificial_viscosity::ArtificialViscosity;
+use sphdisk::physics::eos::Eos;
+use sphdisk::rng::Rng;
+use sphdisk::sweep::local::Local;
+use sphdisk::sweep::reference::{brute_force_pairs, full_list_minimum_image};
+use sphdisk::sweep::{Physics, Window, all_pairs, evaluate};
+
+/// `n` particles in the unit box: uniform, or (clustered) half of them in two tight blobs.
+fn random_set<const D: usize>(n: usize, clustered: bool, seed: u64) -> Particles<D> {
+    let mut rng = Rng::new(seed);
+    let mut p = Particles::new();
+    for i in 0..n {
+        let pos: [f64; D] = if clustered && i % 2 == 0 {
+            let c = if i % 4 == 0 { 0.25 } else { 0.9 };
+            std::array::from_fn(|_| (c + 0.04 * rng.normal()).rem_euclid(1.0))
+        } else {
+            std::array::from_fn(|_| rng.uniform())
+        };
+        let vel: [f64; D] = std::array::from_fn(|_| rng.normal());
+        let m = 0.5 + rng.uniform();
+        let u = 1.0 + rng.uniform();
+        p.push(i as u64, pos, vel, m, u);
+    }
+    p
+}
+
+fn unit_box<const D: usize>(kinds: [BoundaryKind; D]) -> SimBox<D> {
+    SimBox {
+        min: [0.0; D],
+        max: [1.0; D],
+        kinds,
+    }
+}
+
+fn check_pairs<const D: usize>(p: &Particles<D>, bx: &SimBox<D>, h: f64) {
+    let k = Kernel::<D>::new(h);
+    let local = Local::build(p, bx, k.support());
+    let mut found = all_pairs(&local, &k);
+    let mut brute = brute_force_pairs(&local, k.support());
+    let n_found = found.len();
+    found.sort_unstable();
+    found.dedup();
+    assert_eq!(found.len(), n_found, "a pair was found twice");
+    brute.sort_unstable();
+    assert!(!brute.is_empty());
+    assert_eq!(found, brute, "sweep pairs differ from brute force");
+}
+
+#[test]
+fn pairs_equal_brute_force_in_1d_2d_3d_all_boundaries() {
+    use BoundaryKind::*;
+    for (seed, clustered) in [(1, false), (2, true)] {
+        for kind in [Periodic, Reflecting, Open] {
+            check_pairs(
+                &random_set::<1>(300, clustered, seed),
+                &unit_box([kind]),
+                0.02,
+            );
+            check_pairs(
+                &random_set::<2>(600, clustered, seed),
+                &unit_box([kind; 2]),
+                0.04,
+            );
+            check_pairs(
+                &random_set::<3>(1500, clustered, seed),
+                &unit_box([kind; 3]),
+                0.06,
+            );
+        }
+        check_pairs(
+            &random_set::<3>(1500, clustered, seed),
+            &unit_box([Periodic, Reflecting, Open]),
+            0.07,
+        );
+        check_pairs(
+            &random_set::<2>(800, clustered, seed),
+            &unit_box([Reflecting, Periodic]),
+            0.05,
+        );
+    }
+}
+
+/// Largest |a − b| over the particles relative to the largest |b|: the sums differ only in
+/// the order of their terms, so a few ε times the number of terms (≤ 1e-13 here) is
+/// round-off; 1e-10 leaves room without hiding a missing or doubled pair (which shows at
+/// the percent level).
+fn rel_max_diff(a: &[f64], b: &[f64]) -> f64 {
+    let scale = b.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-300);
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
+}
+
+fn check_sums<const D: usize>(mut p: Particles<D>, bx: &SimBox<D>, h: f64) {
+    let phys = Physics {
+        kernel: Kernel::<D>::new(h),
+        eos: Eos::Ideal { gamma: 5.0 / 3.0 },
+        av: ArtificialViscosity {
+            alpha: 1.0,
+            beta: 2.0,
+            balsara: true,
+        },
+    };
+    let mut reference = p.clone();
+    full_list_minimum_image(&mut reference, bx, &phys);
+    let stats = evaluate(&mut p, bx, &phys, Window::Sweep);
+    assert!(stats.pairs > 0);
+    let tol = 1e-10;
+    let dr = rel_max_diff(&p.rho, &reference.rho);
+    assert!(dr < tol, "density, {D}D {:?}: {dr}", bx.kinds);
+    assert_eq!(p.interactions, reference.interactions);
+    for a in 0..D {
+        assert!(rel_max_diff(&p.acc[a], &reference.acc[a]) < tol, "acc[{a}]");
+        for b in 0..D {
+            let d = rel_max_diff(&p.vgrad[a][b], &reference.vgrad[a][b]);
+            assert!(d < tol, "vgrad[{a}][{b}] {d}");
+        }
+    }
+    assert!(rel_max_diff(&p.du, &reference.du) < tol, "du");
+    assert!(rel_max_diff(&p.diss, &reference.diss) < tol, "dissipation");
+}
+
+#[test]
+fn three_sums_equal_full_pair_list_periodic_and_open() {
+    use BoundaryKind::*;
+    for (seed, clustered) in [(3, false), (4, true)] {
+        check_sums(
+            random_set::<1>(300, clustered, seed),
+            &unit_box([Periodic]),
+            0.02,
+        );
+        check_sums(
+            random_set::<2>(700, clustered, seed),
+            &unit_box([Periodic; 2]),
+            0.04,
+        );
+        check_sums(
+            random_set::<3>(1500, clustered, seed),
+            &unit_box([Periodic; 3]),
+            0.06,
+        );
+        check_sums(
+            random_set::<2>(700, clustered, seed),
+            &unit_box([Open; 2]),
+            0.04,
+        );
+        check_sums(
+            random_set::<3>(1500, clustered, seed),
+            &unit_box([Open, Periodic, Periodic]),
+            0.06,
+        );
+    }
+}
+
+#[test]
+fn full_list_window_gives_identical_results_with_more_memory() {
+    let bx = unit_box([BoundaryKind::Periodic; 3]);
+    let phys = Physics {
+        kernel: Kernel::<3>::new(0.03),
+        eos: Eos::Isothermal { cs: 1.0 },
+        av: ArtificialViscosity::default(),
+    };
+    let mut a = random_set::<3>(4000, false, 9);
+    let mut b = a.clone();
+    let sa = evaluate(&mut a, &bx, &phys, Window::Sweep);
+    let sb = evaluate(&mut b, &bx, &phys, Window::FullList);
+    assert_eq!(a.acc, b.acc);
+    assert_eq!(sa.pairs, sb.pairs);
+    assert_eq!(sb.peak_pairs as u64, sb.pairs);
+    assert!(
+        (sa.peak_pairs as f64) < 0.5 * sb.peak_pairs as f64,
+        "window {} vs full {}",
+        sa.peak_pairs,
+        sb.peak_pairs
+    );
+}
