@@ -3,10 +3,17 @@
 //!
 //! See `ARCHITECTURE.md` for the data flow of one step and which module owns what.
 
+pub mod analysis;
+pub mod bench;
 pub mod boundary;
+pub mod config;
 pub mod grid;
+pub mod integrate;
+pub mod io;
 pub mod kernel;
 pub mod particles;
 pub mod physics;
+pub mod problems;
 pub mod rng;
+pub mod simulation;
 pub mod sweep;

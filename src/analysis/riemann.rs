@@ -1,4 +1,5 @@
-//! Exact Riemann solver for the 1D Euler equations of an ideal gas (Toro 2009, ch. 4):
+//! Exact Riemann solver for the 1D Euler equations of an ideal gas (E. F. Toro, *Riemann Solvers
+//! and Numerical Methods for Fluid Dynamics*, 3rd ed. 2009, ch. 4):
 //! star-region state by safeguarded Newton iteration on the pressure function, and
 //! sampling of the self-similar solution (shocks, rarefaction fans, contact).
 
@@ -57,11 +58,12 @@ fn sound_speed(state: &PrimitiveState, gamma: f64) -> f64 {
     (gamma * state.p / state.rho).sqrt()
 }
 
-/// Toro's pressure function f_K(p) and its derivative for one side K (Toro eqs. 4.6–4.7, 4.37).
+/// Toro's pressure function f_K(p) and its derivative for one side K (Toro §4.2–4.3).
 ///
 /// Shock branch (p > p_K): f_K = (p − p_K) sqrt(A_K/(p + B_K)), A_K = 2/((γ+1)ρ_K),
 /// B_K = (γ−1)/(γ+1) p_K.
-/// Rarefaction branch (p ≤ p_K): f_K = 2c_K/(γ−1) [(p/p_K)^((γ−1)/(2γ)) − 1].
+/// Rarefaction branch (p ≤ p_K): f_K = 2c_K/(γ−1) [(p/p_K)^((γ−1)/(2γ)) − 1], evaluated with
+/// `exp_m1` so that it stays accurate for γ → 1.
 fn pressure_function(p: f64, state: &PrimitiveState, c: f64, gamma: f64) -> (f64, f64) {
     if p > state.p {
         let a = 2.0 / ((gamma + 1.0) * state.rho);
@@ -104,17 +106,20 @@ fn validate_state(state: &PrimitiveState, side: &str) -> Result<(), String> {
 impl RiemannSolution {
     /// Solves the Riemann problem with states `left` (x < x0) and `right` (x > x0) at t = 0.
     ///
-    /// p* is the root of f(p) = f_L(p) + f_R(p) + (v_R − v_L) (Toro eq. 4.5), found by Newton
-    /// iteration (Toro §4.3.2) from the two-rarefaction guess (Toro eq. 4.46), safeguarded by
+    /// p* is the root of f(p) = f_L(p) + f_R(p) + (v_R − v_L) (Toro §4.2), found by Newton
+    /// iteration (Toro §4.3) from Toro's adaptive initial guess, safeguarded by
     /// bisection inside a bracket [p_lo, p_hi] with f(p_lo) < 0 < f(p_hi), and stopped when the
     /// relative change of p is below 1e-14. Then v* = (v_L + v_R)/2 + (f_R(p*) − f_L(p*))/2
-    /// (Toro eq. 4.9), and the star densities follow from the shock (Toro eqs. 4.50, 4.57) or
-    /// isentropic (Toro eqs. 4.53, 4.60) relations.
+    /// (Toro §4.2), and the star densities follow from the shock or isentropic relations
+    /// (Toro §4.4).
     ///
     /// # Errors
     /// Returns a message naming the cause for non-positive or non-finite densities or
     /// pressures, non-finite velocities, `gamma <= 1` (or non-finite), vacuum generation
-    /// (v_R − v_L ≥ 2(c_L + c_R)/(γ − 1), Toro eq. 4.40), or failure of the iteration.
+    /// (v_R − v_L ≥ 2(c_L + c_R)/(γ − 1), Toro §4.3, §4.6), a star pressure so close to vacuum
+    /// that it underflows f64 (p* < ~1e-308 max(p_L, p_R, 1); only for γ very close to 1 near
+    /// the vacuum limit), or failure of the iteration. All error messages contain "vacuum"
+    /// for the two vacuum cases.
     pub fn solve(left: PrimitiveState, right: PrimitiveState, gamma: f64) -> Result<Self, String> {
         if !(gamma.is_finite() && gamma > 1.0) {
             return Err(format!(
@@ -147,8 +152,8 @@ impl RiemannSolution {
             p = 0.5 * (left.p + right.p);
         }
 
-        // Bracket [p_lo, p_hi] with f(p_lo) < 0 <= f(p_hi): f increases monotonically in p,
-        // f(0+) = dv - dv_crit < 0 and f -> +inf as p -> inf. p_lo = 0 stands for 0+.
+        // Bracket 0 < p_lo < p_hi with f(p_lo) < 0 <= f(p_hi): f increases monotonically in p,
+        // f(0+) = dv - dv_crit < 0 and f -> +inf as p -> inf.
         let (mut p_lo, mut p_hi) = if f(p).0 < 0.0 {
             let mut hi = p;
             while f(hi).0 < 0.0 {
@@ -173,8 +178,8 @@ impl RiemannSolution {
         };
         p = p.clamp(p_lo, p_hi);
 
-        // Newton iteration (Toro eq. 4.44), falling back to bisection (geometric where the
-        // bracket is positive) whenever a Newton step leaves the bracket.
+        // Newton iteration (Toro §4.3), falling back to geometric bisection whenever a Newton
+        // step leaves the bracket.
         let mut converged = false;
         for _ in 0..MAX_ITERATIONS {
             let (fp, dfp) = f(p);
@@ -190,10 +195,8 @@ impl RiemannSolution {
             let newton = p - fp / dfp;
             let p_new = if newton.is_finite() && newton > p_lo && newton < p_hi {
                 newton
-            } else if p_lo > 0.0 {
-                p_lo.sqrt() * p_hi.sqrt()
             } else {
-                0.5 * p_hi
+                p_lo.sqrt() * p_hi.sqrt()
             };
             let change = 2.0 * (p_new - p).abs() / (p_new + p);
             p = p_new;
@@ -264,8 +267,9 @@ impl RiemannSolution {
 
     /// Wave speeds: left wave (head, tail), contact, right wave (tail, head).
     ///
-    /// Shock speeds from Toro eqs. 4.52 / 4.59; rarefaction heads v_L − c_L, v_R + c_R and tails
-    /// v* − c*_L, v* + c*_R with c*_K = c_K (p*/p_K)^((γ−1)/(2γ)) (Toro eqs. 4.54–4.55, 4.61–4.62).
+    /// Shock speeds S_L = v_L − c_L Q_L, S_R = v_R + c_R Q_R with
+    /// Q_K = sqrt((γ+1)/(2γ) p*/p_K + (γ−1)/(2γ)); rarefaction heads v_L − c_L, v_R + c_R and tails
+    /// v* − c*_L, v* + c*_R with c*_K = c_K (p*/p_K)^((γ−1)/(2γ)) (Toro §4.4).
     pub fn wave_speeds(&self) -> WaveSpeeds {
         let g = self.gamma;
         let (left_head, left_tail) = if self.p_star > self.left.p {
@@ -301,7 +305,7 @@ impl RiemannSolution {
     ///
     /// Inside a left fan: v = 2/(γ+1) [c_L + (γ−1)/2 v_L + ξ],
     /// ρ = ρ_L [2/(γ+1) + (γ−1)/((γ+1)c_L) (v_L − ξ)]^(2/(γ−1)), p = p_L (ρ/ρ_L)^γ
-    /// (Toro eq. 4.56); the right fan is the mirror image (Toro eq. 4.63). Exactly on a
+    /// (Toro §4.5); the right fan is the mirror image. Exactly on a
     /// discontinuity the state on its left is returned.
     pub fn sample(&self, xi: f64) -> PrimitiveState {
         let g = self.gamma;
@@ -350,9 +354,10 @@ impl RiemannSolution {
     }
 }
 
-/// Toro's adaptive initial guess for p* (Toro §9.5.2): the primitive-variable estimate
-/// (Toro eq. 9.28) for weak waves, the two-rarefaction estimate (Toro eq. 4.46) when p* is
-/// below both pressures, and the two-shock estimate (Toro eq. 9.42) otherwise.
+/// Toro's adaptive initial guess for p* (Toro §4.3 and §9.5): the primitive-variable estimate
+/// p_PV = (p_L + p_R)/2 − (v_R − v_L)(ρ_L + ρ_R)(c_L + c_R)/8 for weak waves, the
+/// two-rarefaction estimate when p_PV is below both pressures, and the two-shock estimate
+/// otherwise.
 fn initial_guess(
     left: &PrimitiveState,
     right: &PrimitiveState,
@@ -389,7 +394,8 @@ fn initial_guess(
     }
 }
 
-/// Density behind a shock (Toro eqs. 4.50, 4.57) or a rarefaction (Toro eqs. 4.53, 4.60).
+/// Density behind a shock, ρ_K [(p*/p_K + G)/(G p*/p_K + 1)] with G = (γ−1)/(γ+1), or a
+/// rarefaction, ρ_K (p*/p_K)^(1/γ) (Toro §4.4).
 fn star_density(p_star: f64, state: &PrimitiveState, gamma: f64) -> f64 {
     let ratio = p_star / state.p;
     if p_star > state.p {

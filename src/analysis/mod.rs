@@ -1,0 +1,132 @@
+//! Exact solutions the validations compare against, and the measurements taken from particles
+//! (error norms, binned profiles, front positions).
+
+pub mod advection;
+pub mod riemann;
+pub mod sedov;
+
+use crate::particles::Particles;
+
+/// Volume-weighted L1 norm ∫|e| dV / ∫dV with particle volumes m/ρ.
+pub fn l1_norm<const D: usize>(p: &Particles<D>, err: impl Fn(usize) -> f64) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for i in 0..p.len() {
+        let v = p.mass[i] / p.rho[i];
+        num += v * err(i).abs();
+        den += v;
+    }
+    num / den
+}
+
+/// Mean density in bins of width `bin` along x, as (bin centre, mean ρ), empty bins skipped.
+pub fn x_profile<const D: usize>(p: &Particles<D>, bin: f64) -> Vec<(f64, f64)> {
+    binned(p.len(), |i| p.pos[0][i], |i| p.rho[i], bin)
+}
+
+/// Mean density in spherical (circular) shells of width `bin` about `centre`.
+pub fn radial_profile<const D: usize>(
+    p: &Particles<D>,
+    centre: [f64; D],
+    bin: f64,
+) -> Vec<(f64, f64)> {
+    let r = |i: usize| {
+        (0..D)
+            .map(|d| (p.pos[d][i] - centre[d]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    binned(p.len(), r, |i| p.rho[i], bin)
+}
+
+fn binned(
+    n: usize,
+    coord: impl Fn(usize) -> f64,
+    value: impl Fn(usize) -> f64,
+    bin: f64,
+) -> Vec<(f64, f64)> {
+    let (lo, hi) = (0..n)
+        .map(&coord)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    if n == 0 {
+        return Vec::new();
+    }
+    let nb = ((hi - lo) / bin).floor() as usize + 1;
+    let mut sum = vec![0.0; nb];
+    let mut count = vec![0usize; nb];
+    for i in 0..n {
+        let b = (((coord(i) - lo) / bin).floor() as usize).min(nb - 1);
+        sum[b] += value(i);
+        count[b] += 1;
+    }
+    (0..nb)
+        .filter(|&b| count[b] > 0)
+        .map(|b| (lo + (b as f64 + 0.5) * bin, sum[b] / count[b] as f64))
+        .collect()
+}
+
+/// Scanning a profile from the right, starting below `x_max`, the first place where it rises
+/// to `threshold`: linear interpolation between the bins on either side of the crossing.
+pub fn crossing_from_right(profile: &[(f64, f64)], threshold: f64, x_max: f64) -> Option<f64> {
+    let start = profile.iter().rposition(|&(x, _)| x < x_max)?;
+    let k = profile[..=start]
+        .iter()
+        .rposition(|&(_, v)| v >= threshold)?;
+    if k == start {
+        return Some(profile[k].0);
+    }
+    let ((x0, v0), (x1, v1)) = (profile[k], profile[k + 1]);
+    Some(x0 + (v0 - threshold) / (v0 - v1) * (x1 - x0))
+}
+
+/// Scanning from the left, the bin where the profile peaks (the first maximum), refined by
+/// a parabola through it and its neighbours.
+pub fn peak_position(profile: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let k = (0..profile.len()).max_by(|&a, &b| profile[a].1.total_cmp(&profile[b].1))?;
+    if k == 0 || k + 1 == profile.len() {
+        return Some(profile[k]);
+    }
+    let ((x0, y0), (x1, y1), (x2, y2)) = (profile[k - 1], profile[k], profile[k + 1]);
+    let denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
+    let a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom;
+    let b = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
+    if a >= 0.0 {
+        return Some(profile[k]);
+    }
+    let xv = -b / (2.0 * a);
+    Some((xv.clamp(x0, x2), y1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crossing_interpolates_between_bins() {
+        let prof = [(0.0, 1.0), (1.0, 1.0), (2.0, 0.2), (3.0, 0.2)];
+        let x = crossing_from_right(&prof, 0.6, f64::INFINITY).unwrap();
+        assert!((x - 1.5).abs() < 1e-12);
+        assert_eq!(crossing_from_right(&prof, 5.0, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn peak_of_a_parabola_is_found_between_bins() {
+        let prof: Vec<(f64, f64)> = (0..10)
+            .map(|i| (i as f64, -(i as f64 - 4.3).powi(2)))
+            .collect();
+        let (x, _) = peak_position(&prof).unwrap();
+        assert!((x - 4.3).abs() < 1e-9, "{x}");
+    }
+
+    #[test]
+    fn l1_norm_is_volume_weighted() {
+        let mut p = Particles::<1>::new();
+        p.push(0, [0.0], [0.0], 1.0, 1.0);
+        p.push(1, [1.0], [0.0], 1.0, 1.0);
+        p.rho = vec![1.0, 0.5];
+        // Volumes 1 and 2: (1·1 + 2·4)/3 = 3.
+        let e = l1_norm(&p, |i| [1.0, -4.0][i]);
+        assert!((e - 3.0).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,107 @@
+//! `sphdisk bench`: throughput of the sweep on a 3D periodic box of uniformly spread
+//! particles at a chosen neighbour count — particle updates per second, pairs per second
+//! per core, the window's peak memory, and the process's peak memory — for each thread count.
+
+use std::time::Instant;
+
+use anyhow::Result;
+
+use crate::boundary::{BoundaryKind, SimBox};
+use crate::integrate::{StepControl, kdk_step, time_step};
+use crate::io::summary::peak_rss_bytes;
+use crate::kernel::Kernel;
+use crate::particles::Particles;
+use crate::physics::artificial_viscosity::ArtificialViscosity;
+use crate::physics::eos::Eos;
+use crate::problems::lattice;
+use crate::rng::Rng;
+use crate::sweep::{Physics, Window, evaluate};
+
+/// One benchmark configuration's figures.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BenchResult {
+    pub particles: usize,
+    pub threads: usize,
+    pub window: String,
+    pub steps: usize,
+    pub mean_neighbours: f64,
+    pub seconds_per_step: f64,
+    pub particle_updates_per_second: f64,
+    pub pairs_per_second: f64,
+    pub pairs_per_second_per_core: f64,
+    pub peak_window_pairs: usize,
+    pub peak_window_bytes: usize,
+    pub full_list_bytes: usize,
+    pub peak_rss_bytes: u64,
+}
+
+/// A jittered cubic lattice of about `n` particles in the unit periodic box, with h set for
+/// about `neighbours` partners within the support: (4π/3)(2h)³ n = neighbours.
+pub fn uniform_box(n: usize, neighbours: f64, seed: u64) -> (Particles<3>, SimBox<3>, f64) {
+    let k = (n as f64).cbrt().round().max(2.0) as usize;
+    let dx = 1.0 / k as f64;
+    let mut rng = Rng::new(seed);
+    let mut p = Particles::new();
+    let total = (k * k * k) as f64;
+    for x in lattice::cuboid([0.0; 3], [dx; 3], [k; 3]) {
+        let jitter: [f64; 3] =
+            std::array::from_fn(|d| (x[d] + 0.2 * dx * (rng.uniform() - 0.5)).rem_euclid(1.0));
+        let v: [f64; 3] = std::array::from_fn(|_| 0.01 * rng.normal());
+        let id = p.len() as u64;
+        p.push(id, jitter, v, 1.0 / total, 1.0);
+    }
+    let support = (neighbours * 3.0 / (4.0 * std::f64::consts::PI * total)).cbrt();
+    let bx = SimBox {
+        min: [0.0; 3],
+        max: [1.0; 3],
+        kinds: [BoundaryKind::Periodic; 3],
+    };
+    (p, bx, 0.5 * support)
+}
+
+/// Runs `steps` KDK steps (after one warm-up evaluation) with the current rayon pool.
+pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Result<BenchResult> {
+    let (mut p, bx, h) = uniform_box(n, neighbours, 7);
+    let phys = Physics {
+        kernel: Kernel::<3>::new(h),
+        eos: Eos::Ideal { gamma: 5.0 / 3.0 },
+        av: ArtificialViscosity {
+            alpha: 1.0,
+            beta: 2.0,
+            balsara: false,
+        },
+    };
+    let ctl = StepControl {
+        courant: 0.3,
+        force: 0.25,
+        energy: 0.3,
+    };
+    let warm = evaluate(&mut p, &bx, &phys, window);
+    let start = Instant::now();
+    let mut pairs = 0u64;
+    let mut peak = warm.peak_pairs;
+    for _ in 0..steps {
+        let dt = time_step(&p, h, &ctl, true);
+        let s = kdk_step(&mut p, &bx, &phys, window, dt);
+        pairs += s.pairs;
+        peak = peak.max(s.peak_pairs);
+    }
+    let secs = start.elapsed().as_secs_f64();
+    let threads = rayon::current_num_threads();
+    let per_step_pairs = pairs as f64 / steps as f64;
+    Ok(BenchResult {
+        particles: p.len(),
+        threads,
+        window: format!("{window:?}"),
+        steps,
+        mean_neighbours: 2.0 * per_step_pairs / p.len() as f64,
+        seconds_per_step: secs / steps as f64,
+        particle_updates_per_second: p.len() as f64 * steps as f64 / secs,
+        pairs_per_second: pairs as f64 / secs,
+        pairs_per_second_per_core: pairs as f64 / secs / threads as f64,
+        peak_window_pairs: peak,
+        peak_window_bytes: peak * crate::sweep::pairs::BYTES_PER_PAIR,
+        full_list_bytes: per_step_pairs as usize * crate::sweep::pairs::BYTES_PER_PAIR,
+        peak_rss_bytes: peak_rss_bytes(),
+    })
+}

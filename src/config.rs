@@ -1,0 +1,542 @@
+//! The problem file: its TOML schema, `--set key=value` overrides by dotted key, and the
+//! checks that turn bad input into one clear line naming the key or value.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
+
+use crate::boundary::BoundaryKind;
+use crate::physics::artificial_viscosity::ArtificialViscosity;
+use crate::physics::eos::Eos;
+
+/// A whole problem file. Every table rejects keys it does not know.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    pub problem: ProblemSection,
+    pub particles: ParticlesSection,
+    pub eos: Eos,
+    #[serde(default)]
+    pub artificial_viscosity: ArtificialViscosity,
+    #[serde(default)]
+    pub boundary: BoundarySection,
+    pub time: TimeSection,
+    #[serde(default)]
+    pub output: OutputSection,
+    #[serde(default)]
+    pub sweep: SweepSection,
+    /// Overrides the problem's box: `min` and `max`, one entry per dimension.
+    pub domain: Option<DomainSection>,
+    pub sod: Option<SodParams>,
+    pub advection: Option<AdvectionParams>,
+    pub sedov: Option<SedovParams>,
+    pub initial: Option<InitialFileParams>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProblemKind {
+    /// Shock tube with an exact Riemann solution (any left/right states).
+    Sod,
+    /// A smooth pulse in pressure equilibrium advected around a periodic box.
+    Advection,
+    /// Sedov–Taylor point blast.
+    Sedov,
+    /// Particles read from a CSV file (`[initial] file`).
+    File,
+}
+
+impl ProblemKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            ProblemKind::Sod => "sod",
+            ProblemKind::Advection => "advection",
+            ProblemKind::Sedov => "sedov",
+            ProblemKind::File => "file",
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProblemSection {
+    pub kind: ProblemKind,
+    pub dimension: usize,
+    /// Label for outputs; the problem file's stem by default.
+    pub name: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticlesSection {
+    /// Resolution: particles along x of the reference state (see each problem).
+    pub n: Option<usize>,
+    /// Smoothing length in units of the problem's reference particle spacing.
+    pub h_factor: Option<f64>,
+    /// Smoothing length in code units (overrides `h_factor`).
+    pub h: Option<f64>,
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySection {
+    pub x: Option<BoundaryKind>,
+    pub y: Option<BoundaryKind>,
+    pub z: Option<BoundaryKind>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSection {
+    pub end: f64,
+    /// Courant factor: Δt ≤ courant · h / v_sig.
+    #[serde(default = "default_courant")]
+    pub courant: f64,
+    /// Force factor: Δt ≤ force · √(h / |a|).
+    #[serde(default = "default_force")]
+    pub force: f64,
+    /// Energy factor: Δt ≤ energy · u / |du/dt| where u decreases.
+    #[serde(default = "default_energy")]
+    pub energy: f64,
+    #[serde(default = "default_max_steps")]
+    pub max_steps: u64,
+}
+
+fn default_courant() -> f64 {
+    0.3
+}
+fn default_force() -> f64 {
+    0.25
+}
+fn default_energy() -> f64 {
+    0.3
+}
+fn default_max_steps() -> u64 {
+    10_000_000
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSection {
+    /// Time between snapshots (CSV, `snap_NNNN.csv`); none if absent or 0.
+    pub interval: Option<f64>,
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSection {
+    /// `sweep` (drop pairs as soon as both partners are done) or `full` (keep the whole list,
+    /// for memory comparisons).
+    #[serde(default)]
+    pub window: WindowKind,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WindowKind {
+    #[default]
+    Sweep,
+    Full,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSection {
+    pub min: Vec<f64>,
+    pub max: Vec<f64>,
+}
+
+/// A primitive state (density, velocity along x, pressure).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StateParams {
+    pub rho: f64,
+    pub p: f64,
+    #[serde(default)]
+    pub v: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SodParams {
+    pub left: StateParams,
+    pub right: StateParams,
+    /// Diaphragm position.
+    pub x0: f64,
+    /// Tube length: the tube is [0, length] along x.
+    pub length: f64,
+    /// Cross-section side in 2D/3D (rounded to whole lattice spacings).
+    pub width: f64,
+}
+
+impl Default for SodParams {
+    fn default() -> Self {
+        Self {
+            left: StateParams {
+                rho: 1.0,
+                p: 1.0,
+                v: 0.0,
+            },
+            right: StateParams {
+                rho: 0.125,
+                p: 0.1,
+                v: 0.0,
+            },
+            x0: 0.5,
+            length: 1.0,
+            width: 0.1,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AdvectionParams {
+    pub rho0: f64,
+    pub p0: f64,
+    /// Peak density contrast of the pulse: ρ = ρ0 (1 + amplitude · f).
+    pub amplitude: f64,
+    /// Gaussian-equivalent width of the pulse (box units).
+    pub width: f64,
+    /// Velocity component along every axis.
+    pub velocity: f64,
+    /// Box side (the box is [0, length]^D).
+    pub length: f64,
+}
+
+impl Default for AdvectionParams {
+    fn default() -> Self {
+        Self {
+            rho0: 1.0,
+            p0: 1.0,
+            amplitude: 0.5,
+            width: 0.1,
+            velocity: 1.0,
+            length: 1.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SedovParams {
+    pub energy: f64,
+    pub rho0: f64,
+    pub p0: f64,
+    /// Box side (the box is [−length/2, length/2]^D).
+    pub length: f64,
+}
+
+impl Default for SedovParams {
+    fn default() -> Self {
+        Self {
+            energy: 1.0,
+            rho0: 1.0,
+            p0: 1e-6,
+            length: 1.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialFileParams {
+    /// CSV with the `final.csv` header (`id,x,y,z,vx,vy,vz,m,h,rho,u,p`); relative paths are
+    /// taken from the problem file's folder.
+    pub file: String,
+}
+
+/// Applies `key=value` to a TOML table, creating intermediate tables. The value is parsed as
+/// TOML (number, boolean, array, quoted string); a bare word is taken as a string.
+pub fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<()> {
+    let (key, raw) = assignment
+        .split_once('=')
+        .with_context(|| format!("--set expects key=value, got `{assignment}`"))?;
+    let key = key.trim();
+    let raw = raw.trim();
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        bail!("--set: malformed key `{key}`");
+    }
+    let value = match format!("v = {raw}").parse::<toml::Table>() {
+        Ok(mut t) => t.remove("v").expect("parsed key"),
+        Err(_) => toml::Value::String(raw.to_string()),
+    };
+    let parts: Vec<&str> = key.split('.').collect();
+    let mut cur = table;
+    for (n, part) in parts[..parts.len() - 1].iter().enumerate() {
+        let entry = cur
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        cur = match entry {
+            toml::Value::Table(t) => t,
+            _ => bail!("--set {key}: `{}` is not a table", parts[..=n].join(".")),
+        };
+    }
+    cur.insert(parts[parts.len() - 1].to_string(), value);
+    Ok(())
+}
+
+impl Config {
+    /// Reads a problem file, applies overrides, and checks it. Errors name the file, the
+    /// key and the cause.
+    pub fn load(path: &Path, overrides: &[String]) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read problem file {}", path.display()))?;
+        let mut table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
+        for o in overrides {
+            apply_override(&mut table, o)?;
+        }
+        let mut cfg = Self::from_table(table).with_context(|| path.display().to_string())?;
+        if cfg.problem.name.is_none() {
+            cfg.problem.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+        }
+        if let Some(init) = &mut cfg.initial {
+            let p = Path::new(&init.file);
+            if p.is_relative()
+                && let Some(dir) = path.parent()
+            {
+                init.file = dir.join(p).to_string_lossy().into_owned();
+            }
+        }
+        Ok(cfg)
+    }
+
+    /// Deserialises and validates a table; unknown keys, missing keys and bad values are
+    /// reported with their dotted path.
+    pub fn from_table(table: toml::Table) -> Result<Self> {
+        let cfg: Config =
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                let path = e.path().to_string();
+                let inner = e.into_inner().to_string();
+                let inner = inner.trim_end();
+                if path == "." || path.is_empty() {
+                    anyhow::anyhow!("{inner}")
+                } else {
+                    anyhow::anyhow!("key `{path}`: {inner}")
+                }
+            })?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    pub fn dimension(&self) -> usize {
+        self.problem.dimension
+    }
+
+    pub fn name(&self) -> &str {
+        self.problem
+            .name
+            .as_deref()
+            .unwrap_or(self.problem.kind.name())
+    }
+
+    fn validate(&self) -> Result<()> {
+        let d = self.problem.dimension;
+        if !(1..=3).contains(&d) {
+            bail!("key `problem.dimension`: must be 1, 2 or 3, got {d}");
+        }
+        let positive = |key: &str, v: f64| -> Result<()> {
+            if !(v > 0.0 && v.is_finite()) {
+                bail!("key `{key}`: must be > 0, got {v}");
+            }
+            Ok(())
+        };
+        if let Some(h) = self.particles.h {
+            positive("particles.h", h)?;
+        }
+        if let Some(f) = self.particles.h_factor {
+            positive("particles.h_factor", f)?;
+        }
+        if self.problem.kind != ProblemKind::File {
+            match self.particles.n {
+                None => bail!(
+                    "key `particles.n`: missing (the resolution of problem kind `{}`)",
+                    self.problem.kind.name()
+                ),
+                Some(0) => bail!("key `particles.n`: must be > 0, got 0"),
+                Some(_) => {}
+            }
+            if self.particles.h.is_none() && self.particles.h_factor.is_none() {
+                bail!("key `particles.h_factor`: missing (give particles.h_factor or particles.h)");
+            }
+        } else if self.particles.h.is_none() {
+            bail!("key `particles.h`: missing (a file problem needs the smoothing length)");
+        }
+        self.eos
+            .validate()
+            .map_err(|e| anyhow::anyhow!("key `{}`", e.replacen(" must", "`: must", 1)))?;
+        self.artificial_viscosity
+            .validate()
+            .map_err(|e| anyhow::anyhow!("key `{}`", e.replacen(" must", "`: must", 1)))?;
+        positive("time.end", self.time.end)?;
+        for (k, v) in [
+            ("time.courant", self.time.courant),
+            ("time.force", self.time.force),
+            ("time.energy", self.time.energy),
+        ] {
+            positive(k, v)?;
+            if v > 1.0 {
+                bail!("key `{k}`: a step-limiter factor must be ≤ 1, got {v}");
+            }
+        }
+        if let Some(i) = self.output.interval
+            && !(i >= 0.0 && i.is_finite())
+        {
+            bail!("key `output.interval`: must be ≥ 0, got {i}");
+        }
+        if let Some(dom) = &self.domain {
+            if dom.min.len() != d || dom.max.len() != d {
+                bail!("key `domain`: min and max need {d} entries each (problem.dimension = {d})");
+            }
+            for a in 0..d {
+                if !(dom.max[a] > dom.min[a]) {
+                    bail!("key `domain`: max must exceed min on every axis");
+                }
+            }
+        }
+        if d < 3 && self.boundary.z.is_some() {
+            bail!("key `boundary.z`: a {d}D problem has no z axis");
+        }
+        if d < 2 && self.boundary.y.is_some() {
+            bail!("key `boundary.y`: a 1D problem has no y axis");
+        }
+        // Parameter tables of other problem kinds are a mistake worth naming.
+        let kind = self.problem.kind;
+        for (table, present, owner) in [
+            ("sod", self.sod.is_some(), ProblemKind::Sod),
+            (
+                "advection",
+                self.advection.is_some(),
+                ProblemKind::Advection,
+            ),
+            ("sedov", self.sedov.is_some(), ProblemKind::Sedov),
+            ("initial", self.initial.is_some(), ProblemKind::File),
+        ] {
+            if present && kind != owner {
+                bail!(
+                    "table `[{table}]` does not apply to problem.kind = \"{}\"",
+                    kind.name()
+                );
+            }
+        }
+        if kind == ProblemKind::File && self.initial.is_none() {
+            bail!(
+                "key `initial.file`: missing (problem.kind = \"file\" reads its particles from it)"
+            );
+        }
+        if kind == ProblemKind::File && self.domain.is_none() {
+            bail!(
+                "key `domain`: missing (problem.kind = \"file\" needs the box: domain.min, domain.max)"
+            );
+        }
+        Ok(())
+    }
+
+    /// The problem file as it was run (after overrides), flattened to dotted keys.
+    pub fn flattened(&self) -> BTreeMap<String, String> {
+        let mut out = BTreeMap::new();
+        let value = toml::Value::try_from(self).expect("config serialises");
+        flatten("", &value, &mut out);
+        out
+    }
+}
+
+fn flatten(prefix: &str, v: &toml::Value, out: &mut BTreeMap<String, String>) {
+    match v {
+        toml::Value::Table(t) => {
+            for (k, v) in t {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                flatten(&key, v, out);
+            }
+        }
+        other => {
+            out.insert(prefix.to_string(), other.to_string());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SOD: &str = r#"
+        [problem]
+        kind = "sod"
+        dimension = 1
+        [particles]
+        n = 100
+        h_factor = 1.2
+        [eos]
+        kind = "ideal"
+        gamma = 1.4
+        [time]
+        end = 0.2
+    "#;
+
+    fn load(text: &str, sets: &[&str]) -> Result<Config> {
+        let mut t: toml::Table = text.parse()?;
+        for s in sets {
+            apply_override(&mut t, s)?;
+        }
+        Config::from_table(t)
+    }
+
+    #[test]
+    fn set_overrides_dotted_keys_with_typed_values() {
+        let c = load(
+            SOD,
+            &["particles.n=800", "time.end=0.15", "boundary.x=periodic"],
+        )
+        .unwrap();
+        assert_eq!(c.particles.n, Some(800));
+        assert_eq!(c.time.end, 0.15);
+        assert_eq!(c.boundary.x, Some(BoundaryKind::Periodic));
+    }
+
+    #[test]
+    fn unknown_key_is_named_with_its_path() {
+        let e = load(SOD, &["particles.nn=3"]).unwrap_err().to_string();
+        assert!(e.contains("particles") && e.contains("nn"), "{e}");
+        let e = load(SOD, &["eos.gama=1.4"]).unwrap_err().to_string();
+        assert!(e.contains("eos") && e.contains("gama"), "{e}");
+    }
+
+    #[test]
+    fn missing_and_bad_values_are_named() {
+        let e = load(&SOD.replace("end = 0.2", ""), &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("time") && e.contains("end"), "{e}");
+        let e = load(SOD, &["particles.h_factor=-1"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("particles.h_factor"), "{e}");
+        let e = load(SOD, &["eos.gamma=0.5"]).unwrap_err().to_string();
+        assert!(e.contains("eos.gamma"), "{e}");
+        let e = load(SOD, &["sedov.energy=1"]).unwrap_err().to_string();
+        assert!(e.contains("[sedov]"), "{e}");
+        let e = load(SOD, &["boundary.z=open"]).unwrap_err().to_string();
+        assert!(e.contains("boundary.z"), "{e}");
+    }
+
+    #[test]
+    fn flattened_config_lists_dotted_keys() {
+        let f = load(SOD, &[]).unwrap().flattened();
+        assert_eq!(f.get("particles.n").map(String::as_str), Some("100"));
+        assert_eq!(f.get("eos.gamma").map(String::as_str), Some("1.4"));
+    }
+}

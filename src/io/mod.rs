@@ -1,0 +1,6 @@
+//! Everything written to or read from disk: per-particle CSV (final state, snapshots, initial
+//! conditions), `summary.json`, and the atomic write that keeps what was written valid.
+
+pub mod atomic;
+pub mod csv;
+pub mod summary;

@@ -1,0 +1,121 @@
+//! Problem set-ups: each kind builds its initial particles, box and smoothing length from the
+//! problem file, and measures its error against its exact solution at the end.
+
+pub mod advection;
+pub mod file;
+pub mod lattice;
+pub mod sedov;
+pub mod sod;
+
+use std::collections::BTreeMap;
+
+use anyhow::{Result, bail};
+
+use crate::boundary::{BoundaryKind, SimBox, axis_name};
+use crate::config::{Config, ProblemKind};
+use crate::particles::Particles;
+
+/// What a problem hands the integrator.
+pub struct InitialState<const D: usize> {
+    pub particles: Particles<D>,
+    pub bx: SimBox<D>,
+    pub h: f64,
+    /// If set, the internal energies are reset after the first density sum so that the
+    /// pressure is exactly this value everywhere (a quiet pressure equilibrium).
+    pub pressure_equilibrium: Option<f64>,
+}
+
+/// The smoothing length: `particles.h`, or `particles.h_factor` × the problem's reference
+/// particle spacing.
+pub fn smoothing_length(cfg: &Config, reference_spacing: f64) -> f64 {
+    cfg.particles
+        .h
+        .unwrap_or_else(|| cfg.particles.h_factor.unwrap_or(1.2) * reference_spacing)
+}
+
+/// The box: the problem's own, or `[domain]`; boundary kinds from `[boundary]` or the
+/// problem's defaults.
+pub fn make_box<const D: usize>(
+    cfg: &Config,
+    min: [f64; D],
+    max: [f64; D],
+    default_kinds: [BoundaryKind; D],
+) -> SimBox<D> {
+    let (min, max) = match &cfg.domain {
+        Some(dom) => (
+            std::array::from_fn(|d| dom.min[d]),
+            std::array::from_fn(|d| dom.max[d]),
+        ),
+        None => (min, max),
+    };
+    let given = [cfg.boundary.x, cfg.boundary.y, cfg.boundary.z];
+    let kinds = std::array::from_fn(|d| given[d].unwrap_or(default_kinds[d]));
+    SimBox { min, max, kinds }
+}
+
+pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
+    let state = match cfg.problem.kind {
+        ProblemKind::Sod => sod::setup(cfg)?,
+        ProblemKind::Advection => advection::setup(cfg)?,
+        ProblemKind::Sedov => sedov::setup(cfg)?,
+        ProblemKind::File => file::setup(cfg)?,
+    };
+    check_initial_state(&state)?;
+    Ok(state)
+}
+
+/// Refuses non-physical or misplaced particles, naming the first offender.
+pub fn check_initial_state<const D: usize>(s: &InitialState<D>) -> Result<()> {
+    let p = &s.particles;
+    if p.is_empty() {
+        bail!("the problem has no particles");
+    }
+    if !(s.h > 0.0 && s.h.is_finite()) {
+        bail!("smoothing length h must be > 0, got {}", s.h);
+    }
+    for i in 0..p.len() {
+        if !(p.mass[i] > 0.0 && p.mass[i].is_finite()) {
+            bail!("particle {}: mass must be > 0, got {}", p.id[i], p.mass[i]);
+        }
+        if !(p.u[i] >= 0.0 && p.u[i].is_finite()) {
+            bail!(
+                "particle {}: internal energy must be ≥ 0, got {}",
+                p.id[i],
+                p.u[i]
+            );
+        }
+        for d in 0..D {
+            if !p.pos[d][i].is_finite() || !p.vel[d][i].is_finite() {
+                bail!(
+                    "particle {}: non-finite position or velocity along {}",
+                    p.id[i],
+                    axis_name(d)
+                );
+            }
+        }
+    }
+    let mut ids = p.id.clone();
+    ids.sort_unstable();
+    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+        bail!("particle id {} appears twice", w[0]);
+    }
+    s.bx.validate(crate::kernel::KERNEL_SUPPORT * s.h)?;
+    s.bx.check_inside(&p.pos, &p.id)?;
+    Ok(())
+}
+
+/// The problem's error norms against its exact solution at time `t`.
+pub fn errors<const D: usize>(
+    cfg: &Config,
+    p: &Particles<D>,
+    bx: &SimBox<D>,
+    h: f64,
+    t: f64,
+) -> Result<BTreeMap<String, f64>> {
+    match cfg.problem.kind {
+        ProblemKind::Sod => sod::errors(cfg, p, t),
+        ProblemKind::Advection => advection::errors(cfg, p, bx, t),
+        ProblemKind::Sedov => sedov::errors(cfg, p, h, t),
+        ProblemKind::File => Ok(BTreeMap::new()),
+    }
+}
