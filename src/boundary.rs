@@ -59,10 +59,11 @@ impl<const D: usize> SimBox<D> {
             }
             if self.kinds[d] != BoundaryKind::Open && l < 2.0 * support {
                 bail!(
-                    "domain: the box is too small for the kernel along {}: length {} < 2 × support {} \
-                     (support = 2h); use fewer particles per length, a smaller h, or a larger box",
+                    "domain: the box is too small for the kernel along {}: length {} < {} \
+                     (two kernel supports, support = 2h = {}); use a smaller h or a larger box",
                     AXES[d],
                     l,
+                    2.0 * support,
                     support
                 );
             }

@@ -229,6 +229,9 @@ impl Default for AdvectionParams {
 #[serde(deny_unknown_fields, default)]
 pub struct SedovParams {
     pub energy: f64,
+    /// Radius of the region that receives the energy, in kernel supports (2h); the energy
+    /// is spread with kernel-shaped weights W(r · 2h / radius).
+    pub deposit_radius: f64,
     pub rho0: f64,
     pub p0: f64,
     /// Box side (the box is [−length/2, length/2]^D).
@@ -239,6 +242,7 @@ impl Default for SedovParams {
     fn default() -> Self {
         Self {
             energy: 1.0,
+            deposit_radius: 1.0,
             rho0: 1.0,
             p0: 1e-6,
             length: 1.0,

@@ -93,8 +93,9 @@ pub fn sedov_shock_radius(
 ///
 /// Outside the shock the cold ambient state (ρ0, 0, 0) is returned; exactly at r = R the
 /// post-shock state. At the centre (r = 0) ρ = v = 0 and p is the finite central pressure.
-/// Inside the vacuum core (d = 3, γ > 7) ρ = v = p = 0. Accuracy is about 1e-10 relative, lower
-/// very close to a vacuum boundary where ρ → 0.
+/// Inside the vacuum core (d = 3, γ > 7; at least r < exp(−40/3) R) ρ = v = p = 0. Accuracy is
+/// about 1e-9 relative, lower very close to a vacuum boundary where ρ → 0. Each call integrates
+/// the similarity equations afresh (well under a millisecond); cache if calling per particle.
 ///
 /// # Errors
 /// As [`sedov_shock_radius`], plus `t <= 0` and negative or non-finite `r`.
@@ -317,8 +318,10 @@ impl Similarity {
     fn profile(&self, lambda: f64) -> Result<(f64, f64, f64), String> {
         let g = self.gamma;
         if self.has_vacuum_core() {
+            // Cores smaller than exp(−DEPTH/d) (γ just above 7) are not resolved by `core`; the
+            // gas there is negligible and the region is reported as vacuum.
             let (_, xi_v) = self.core()?;
-            if lambda <= xi_v {
+            if lambda <= xi_v.max((-DEPTH / self.d).exp()) {
                 return Ok((0.0, 0.0, 0.0));
             }
         }

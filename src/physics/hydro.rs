@@ -38,21 +38,30 @@ pub struct ForceSide<const D: usize> {
 }
 
 /// One pair's contribution to the right-hand sides, independent of the partners' masses:
-/// a_i += m_j `accel`, a_j −= m_i `accel`; du_i += m_j (`heat_pressure` + `heat_viscous`),
-/// du_j += m_i (`heat_pressure` + `heat_viscous`). The pairwise antisymmetry makes Σ m a = 0
-/// (momentum conservation) and the split of the work makes d(E_kin + E_int)/dt = 0.
+/// a_i += m_j `accel`, a_j −= m_i `accel`; du_i += m_j (`work_i` + `heat_viscous`),
+/// du_j += m_i (`work_j` + `heat_viscous`). The pairwise antisymmetry makes Σ m a = 0
+/// (momentum conservation) and `work_i + work_j` is exactly the pair's pressure work, so
+/// d(E_kin + E_int)/dt = 0.
 #[derive(Clone, Copy, Debug)]
 pub struct PairForce<const D: usize> {
     pub accel: [f64; D],
-    pub heat_pressure: f64,
+    /// p_i/(ρ_i ρ_j) v_ij·∇_i W_ij: particle i's share of the pressure work.
+    pub work_i: f64,
+    /// p_j/(ρ_i ρ_j) v_ij·∇_i W_ij.
+    pub work_j: f64,
+    /// ½ Π_ij v_ij·∇_i W_ij: viscous heating, shared equally.
     pub heat_viscous: f64,
     pub vsig: f64,
 }
 
 /// Eq. (7) with Monaghan's artificial viscosity Π_ij:
 /// dv_i/dt = −Σ_j m_j [(p_i + p_j)/(ρ_i ρ_j) + Π_ij] ∇_i W_ij, and the energy equation in
-/// its symmetric, energy-conserving form with Eq. (7):
-/// du_i/dt = ½ Σ_j m_j [(p_i + p_j)/(ρ_i ρ_j) + Π_ij] v_ij · ∇_i W_ij.
+/// the form that conserves total energy exactly together with Eq. (7):
+/// du_i/dt = Σ_j m_j [p_i/(ρ_i ρ_j) + ½ Π_ij] v_ij · ∇_i W_ij.
+/// The pressure part is (p_i/ρ_i) Σ_j (m_j/ρ_j) v_ij·∇_i W_ij ≈ −(p_i/ρ_i) ∇·v, the first
+/// law for particle i; each partner's work uses its own pressure. (Splitting the pair's
+/// work equally, ½ (p_i + p_j)/(ρ_i ρ_j), also conserves energy but heats an expanding cold
+/// particle with its hot neighbour's pressure, which traps the energy of a point blast.)
 #[inline]
 pub fn force_pair<const D: usize>(
     dx: &[f64; D],
@@ -75,9 +84,11 @@ pub fn force_pair<const D: usize>(
         0.5 * (i.balsara + j.balsara),
     );
     let coef = -(pterm + pi) * f;
+    let gv = f * vdotr / (i.rho * j.rho);
     PairForce {
         accel: std::array::from_fn(|d| coef * dx[d]),
-        heat_pressure: 0.5 * pterm * f * vdotr,
+        work_i: i.p * gv,
+        work_j: j.p * gv,
         heat_viscous: 0.5 * pi * f * vdotr,
         vsig,
     }
@@ -119,7 +130,7 @@ mod tests {
         for d in 0..2 {
             de += mi * a.v[d] * (mj * pf.accel[d]) - mj * b.v[d] * (mi * pf.accel[d]);
         }
-        de += (mi * mj + mj * mi) * (pf.heat_pressure + pf.heat_viscous);
+        de += mi * mj * (pf.work_i + pf.heat_viscous) + mj * mi * (pf.work_j + pf.heat_viscous);
         assert!(de.abs() < 1e-12, "{de}");
     }
 }

@@ -27,8 +27,11 @@ fn gamma(cfg: &Config) -> Result<f64> {
 pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let s = cfg.sedov.clone().unwrap_or_default();
     gamma(cfg)?;
-    if !(s.energy > 0.0 && s.rho0 > 0.0 && s.p0 >= 0.0 && s.length > 0.0) {
-        bail!("keys `sedov.energy`, `sedov.rho0`, `sedov.length` must be > 0 and `sedov.p0` ≥ 0");
+    if !(s.energy > 0.0 && s.rho0 > 0.0 && s.p0 >= 0.0 && s.length > 0.0 && s.deposit_radius > 0.0)
+    {
+        bail!(
+            "keys `sedov.energy`, `sedov.rho0`, `sedov.length`, `sedov.deposit_radius` must be > 0 and `sedov.p0` ≥ 0"
+        );
     }
     let n = cfg.particles.n.unwrap_or(0);
     let dx = s.length / n as f64;
@@ -40,7 +43,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let pts = lattice::cuboid([-0.5 * s.length; D], [dx; D], [n; D]);
     let weights: Vec<f64> = pts
         .iter()
-        .map(|x| kernel.w(x.iter().map(|c| c * c).sum::<f64>().sqrt()))
+        .map(|x| kernel.w(x.iter().map(|c| c * c).sum::<f64>().sqrt() / s.deposit_radius))
         .collect();
     let wsum: f64 = weights.iter().sum();
     if wsum <= 0.0 {
@@ -80,6 +83,13 @@ pub fn errors<const D: usize>(
     let prof = radial_profile(p, [0.0; D], 0.5 * h);
     let mut e = BTreeMap::new();
     e.insert("shock_radius_exact".into(), exact);
+    // Constant h cannot follow the evacuated core: a particle left with no neighbour keeps
+    // its heat. Report the share of the internal energy held by such particles.
+    let total: f64 = (0..p.len()).map(|i| p.mass[i] * p.u[i]).sum();
+    let isolated: f64 = (0..p.len())
+        .filter(|&i| p.interactions[i] == 0)
+        .fold(0.0, |acc, i| acc + p.mass[i] * p.u[i]);
+    e.insert("isolated_energy_fraction".into(), isolated / total);
     if let Some((rpeak, rho_peak)) = peak_position(&prof) {
         e.insert("density_peak_radius".into(), rpeak);
         e.insert("density_peak".into(), rho_peak);

@@ -312,7 +312,7 @@ impl PairBlock {
                 for d in 0..D {
                     wk.acc[d] += mj * pf.accel[d];
                 }
-                wk.du += mj * (pf.heat_pressure + pf.heat_viscous);
+                wk.du += mj * (pf.work_i + pf.heat_viscous);
                 wk.diss += mj * pf.heat_viscous;
                 wk.vsig = wk.vsig.max(pf.vsig);
             }
@@ -322,7 +322,7 @@ impl PairBlock {
                 for d in 0..D {
                     wk.acc[d] -= mi * pf.accel[d];
                 }
-                wk.du += mi * (pf.heat_pressure + pf.heat_viscous);
+                wk.du += mi * (pf.work_j + pf.heat_viscous);
                 wk.diss += mi * pf.heat_viscous;
                 wk.vsig = wk.vsig.max(pf.vsig);
             }

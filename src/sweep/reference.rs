@@ -132,8 +132,8 @@ pub fn full_list_minimum_image<const D: usize>(
             parts.acc[d][i] += mj * pf.accel[d];
             parts.acc[d][j] -= mi * pf.accel[d];
         }
-        parts.du[i] += mj * (pf.heat_pressure + pf.heat_viscous);
-        parts.du[j] += mi * (pf.heat_pressure + pf.heat_viscous);
+        parts.du[i] += mj * (pf.work_i + pf.heat_viscous);
+        parts.du[j] += mi * (pf.work_j + pf.heat_viscous);
         parts.diss[i] += mj * pf.heat_viscous;
         parts.diss[j] += mi * pf.heat_viscous;
     }

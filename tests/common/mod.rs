@@ -1,0 +1,42 @@
+//! Shared by the physics validations: run a problem file from `problems/` with overrides,
+//! quietly, into a temporary folder.
+
+use std::path::Path;
+
+use sphdisk::config::Config;
+use sphdisk::io::summary::Summary;
+use sphdisk::simulation::{RunOptions, run_with_state};
+
+#[allow(dead_code)]
+pub struct Run<const D: usize> {
+    pub summary: Summary,
+    pub particles: sphdisk::particles::Particles<D>,
+    pub dir: tempfile::TempDir,
+}
+
+pub fn run_problem<const D: usize>(file: &str, sets: &[&str]) -> Run<D> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("problems")
+        .join(file);
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let cfg = Config::load(&path, &sets).expect("problem file loads");
+    assert_eq!(cfg.dimension(), D, "dimension of {file}");
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let opts = RunOptions {
+        out: dir.path().to_path_buf(),
+        progress: false,
+    };
+    let out = run_with_state::<D>(&cfg, &opts).expect("run succeeds");
+    Run {
+        summary: out.summary,
+        particles: out.particles,
+        dir,
+    }
+}
+
+#[allow(dead_code)]
+pub fn error(s: &Summary, key: &str) -> f64 {
+    *s.errors
+        .get(key)
+        .unwrap_or_else(|| panic!("summary has no errors.{key}: {:?}", s.errors))
+}
