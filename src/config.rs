@@ -294,9 +294,15 @@ impl Config {
     pub fn load(path: &Path, overrides: &[String]) -> Result<Self> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read problem file {}", path.display()))?;
-        let mut table: toml::Table = text
-            .parse()
-            .map_err(|e: toml::de::Error| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
+        let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            let at = e.span().map_or(String::new(), |s| {
+                let before = &text[..s.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let col = before.len() - before.rfind('\n').map_or(0, |k| k + 1) + 1;
+                format!("line {line}, column {col}: ")
+            });
+            anyhow::anyhow!("{}: {at}{}", path.display(), one_line(e.message()))
+        })?;
         for o in overrides {
             apply_override(&mut table, o)?;
         }
@@ -321,8 +327,9 @@ impl Config {
         let cfg: Config =
             serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
                 let path = e.path().to_string();
+                // toml appends "\nin `table`"; the dotted path says it already.
                 let inner = e.into_inner().to_string();
-                let inner = inner.trim_end();
+                let inner = inner.lines().next().unwrap_or("").trim_end();
                 if path == "." || path.is_empty() {
                     anyhow::anyhow!("{inner}")
                 } else {
@@ -453,6 +460,15 @@ impl Config {
         flatten("", &value, &mut out);
         out
     }
+}
+
+/// Joins a multi-line message into one line.
+fn one_line(msg: &str) -> String {
+    msg.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 fn flatten(prefix: &str, v: &toml::Value, out: &mut BTreeMap<String, String>) {

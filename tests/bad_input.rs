@@ -1,0 +1,204 @@
+//! Guards the command line against bad input: each mistake ends the program with a non-zero
+//! exit code and one clear line on stderr naming the key or value at fault — never a panic.
+
+use std::path::Path;
+use std::process::Command;
+
+/// Runs `sphdisk` with `args` in `dir`; returns (exit code, stderr).
+fn sphdisk(dir: &Path, args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_sphdisk"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("sphdisk starts");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn problem(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("problems")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// Asserts a clean failure whose single line mentions every word in `expect`.
+fn assert_fails(dir: &Path, args: &[&str], expect: &[&str]) {
+    let (code, err) = sphdisk(dir, args);
+    assert_ne!(code, 0, "{args:?} should fail");
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{args:?}: expected one line, got {err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    for e in expect {
+        assert!(err.contains(e), "{args:?}: `{e}` not in: {err}");
+    }
+}
+
+const FILE_PROBLEM: &str = r#"
+[problem]
+kind = "file"
+dimension = 1
+[particles]
+h = 0.05
+[eos]
+kind = "ideal"
+gamma = 1.4
+[boundary]
+x = "periodic"
+[time]
+end = 0.01
+[domain]
+min = [0.0]
+max = [1.0]
+[initial]
+file = "ic.csv"
+"#;
+
+/// A problem reading particles from `ic.csv`, one of which has the given mass and x.
+fn file_problem(dir: &Path, mass: &str, x: &str) -> String {
+    let mut csv = String::from("id,x,y,z,vx,vy,vz,m,h,rho,u,p\n");
+    for i in 0..40 {
+        let (m, xx) = if i == 7 {
+            (mass.to_string(), x.to_string())
+        } else {
+            ("0.025".to_string(), format!("{}", (i as f64 + 0.5) / 40.0))
+        };
+        csv.push_str(&format!("{i},{xx},0,0,0,0,0,{m},0.05,1,1,1\n"));
+    }
+    std::fs::write(dir.join("ic.csv"), csv).unwrap();
+    let path = dir.join("file.toml");
+    std::fs::write(&path, FILE_PROBLEM).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+#[test]
+fn unknown_key_is_named() {
+    let d = tempfile::tempdir().unwrap();
+    let p = problem("sod.toml");
+    assert_fails(
+        d.path(),
+        &["run", &p, "--set", "particles.nn=3"],
+        &["particles", "nn"],
+    );
+    let bad = d.path().join("typo.toml");
+    let text = std::fs::read_to_string(&p)
+        .unwrap()
+        .replace("gamma = 1.4", "gama = 1.4");
+    std::fs::write(&bad, text).unwrap();
+    assert_fails(
+        d.path(),
+        &["check", bad.to_str().unwrap()],
+        &["eos", "gama"],
+    );
+}
+
+#[test]
+fn missing_required_key_is_named() {
+    let d = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(problem("sod.toml"))
+        .unwrap()
+        .replace("end = 0.2", "");
+    let f = d.path().join("noend.toml");
+    std::fs::write(&f, text).unwrap();
+    assert_fails(d.path(), &["check", f.to_str().unwrap()], &["time", "end"]);
+}
+
+#[test]
+fn negative_or_zero_mass_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let f = file_problem(d.path(), "-1.0", "0.19");
+    assert_fails(d.path(), &["run", &f], &["particle 7", "mass", "-1"]);
+    let f = file_problem(d.path(), "0", "0.19");
+    assert_fails(d.path(), &["run", &f], &["particle 7", "mass"]);
+}
+
+#[test]
+fn zero_or_negative_smoothing_length_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let p = problem("sod.toml");
+    assert_fails(
+        d.path(),
+        &["check", &p, "--set", "particles.h=0"],
+        &["particles.h"],
+    );
+    assert_fails(
+        d.path(),
+        &["check", &p, "--set", "particles.h_factor=-1.5"],
+        &["particles.h_factor"],
+    );
+}
+
+#[test]
+fn box_too_small_for_the_kernel_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    assert_fails(
+        d.path(),
+        &["check", &problem("sod3d.toml"), "--set", "sod.width=0.03"],
+        &["too small", "along y"],
+    );
+}
+
+#[test]
+fn particle_outside_periodic_box_is_named() {
+    let d = tempfile::tempdir().unwrap();
+    let f = file_problem(d.path(), "0.025", "1.5");
+    assert_fails(
+        d.path(),
+        &["run", &f],
+        &["particle 7", "outside", "x = 1.5"],
+    );
+}
+
+#[test]
+fn unreadable_or_malformed_files_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    assert_fails(
+        d.path(),
+        &["run", "nowhere.toml"],
+        &["cannot read problem file", "nowhere.toml"],
+    );
+    let f = d.path().join("broken.toml");
+    std::fs::write(&f, "[problem\nkind = sod").unwrap();
+    assert_fails(d.path(), &["check", f.to_str().unwrap()], &["broken.toml"]);
+    let f = d.path().join("kind.toml");
+    let text = std::fs::read_to_string(problem("sod.toml"))
+        .unwrap()
+        .replace("kind = \"sod\"", "kind = \"sodd\"");
+    std::fs::write(&f, text).unwrap();
+    assert_fails(
+        d.path(),
+        &["check", f.to_str().unwrap()],
+        &["problem.kind", "sodd"],
+    );
+    let f = file_problem(d.path(), "abc", "0.19");
+    assert_fails(d.path(), &["run", &f], &["ic.csv", "line 9", "`m`"]);
+}
+
+#[test]
+fn a_failed_run_leaves_earlier_outputs_intact() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("summary.json"), "{\"kept\": true}").unwrap();
+    let p = problem("sod.toml");
+    assert_fails(
+        d.path(),
+        &[
+            "run",
+            &p,
+            "--out",
+            out.to_str().unwrap(),
+            "--set",
+            "eos.gamma=0.9",
+        ],
+        &["eos.gamma"],
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("summary.json")).unwrap(),
+        "{\"kept\": true}"
+    );
+}
