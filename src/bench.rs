@@ -33,6 +33,8 @@ pub struct BenchResult {
     pub peak_window_bytes: usize,
     pub full_list_bytes: usize,
     pub peak_rss_bytes: u64,
+    /// Seconds per step in each part of the sweep.
+    pub times_per_step: crate::sweep::StageTimes,
 }
 
 /// A jittered cubic lattice of about `n` particles in the unit periodic box, with h set for
@@ -80,12 +82,23 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     let start = Instant::now();
     let mut pairs = 0u64;
     let mut peak = warm.peak_pairs;
+    let mut times = crate::sweep::StageTimes::default();
     for _ in 0..steps {
         let dt = time_step(&p, h, &ctl, true);
         let s = kdk_step(&mut p, &bx, &phys, window, dt);
         pairs += s.pairs;
         peak = peak.max(s.peak_pairs);
+        times.add(&s.times);
     }
+    let k = 1.0 / steps as f64;
+    let times_per_step = crate::sweep::StageTimes {
+        build: times.build * k,
+        find_pairs: times.find_pairs * k,
+        density: times.density * k,
+        gradient: times.gradient * k,
+        force: times.force * k,
+        finish: times.finish * k,
+    };
     let secs = start.elapsed().as_secs_f64();
     let threads = rayon::current_num_threads();
     let per_step_pairs = pairs as f64 / steps as f64;
@@ -103,5 +116,6 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
         peak_window_bytes: peak * crate::sweep::pairs::BYTES_PER_PAIR,
         full_list_bytes: per_step_pairs as usize * crate::sweep::pairs::BYTES_PER_PAIR,
         peak_rss_bytes: peak_rss_bytes(),
+        times_per_step,
     })
 }

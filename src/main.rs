@@ -191,6 +191,11 @@ fn real_main(cli: Cli) -> Result<()> {
                             mib(r.full_list_bytes as f64),
                             mib(r.peak_rss_bytes as f64)
                         );
+                        let t = &r.times_per_step;
+                        println!(
+                            "          per step: build {:.3} s, find pairs {:.3} s, density {:.3} s, gradient {:.3} s, force {:.3} s, finish {:.3} s",
+                            t.build, t.find_pairs, t.density, t.gradient, t.force, t.finish
+                        );
                     }
                 }
             }

@@ -14,6 +14,8 @@ pub mod local;
 pub mod pairs;
 pub mod reference;
 
+use std::time::Instant;
+
 use crate::boundary::SimBox;
 use crate::kernel::Kernel;
 use crate::particles::Particles;
@@ -41,6 +43,32 @@ pub struct SweepStats {
     pub peak_window_bytes: usize,
     pub ghosts: usize,
     pub slabs: usize,
+    /// Seconds spent in each part of the evaluation.
+    pub times: StageTimes,
+}
+
+/// Where an evaluation's time goes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct StageTimes {
+    /// Ghosts, grid, copy into cell order.
+    pub build: f64,
+    pub find_pairs: f64,
+    pub density: f64,
+    pub gradient: f64,
+    pub force: f64,
+    /// Folding ghosts, equation of state, copies to ghosts, write-back.
+    pub finish: f64,
+}
+
+impl StageTimes {
+    pub fn add(&mut self, o: &StageTimes) {
+        self.build += o.build;
+        self.find_pairs += o.find_pairs;
+        self.density += o.density;
+        self.gradient += o.gradient;
+        self.force += o.force;
+        self.finish += o.finish;
+    }
 }
 
 /// How long the window keeps pairs: `Sweep` drops a slab's pairs once its force sum is done
@@ -103,8 +131,8 @@ pub fn evaluate<const D: usize>(
     phys: &Physics<D>,
     window: Window,
 ) -> SweepStats {
-    let local = Local::build(parts, bx, phys.kernel.support());
-    let mut local = local;
+    let clock = Instant::now();
+    let mut local = Local::build(parts, bx, phys.kernel.support());
     let mut work = vec![Work::<D>::default(); local.len()];
     let deps = Dependencies::new(&local);
     let ns = local.num_slabs();
@@ -116,6 +144,11 @@ pub fn evaluate<const D: usize>(
         slabs: ns,
         ..Default::default()
     };
+    let mut times = StageTimes {
+        build: clock.elapsed().as_secs_f64(),
+        ..Default::default()
+    };
+    let lap = |t: &mut f64, since: Instant| *t += since.elapsed().as_secs_f64();
     let mut live_pairs = 0usize;
 
     let pairs_done = |pair_stage: &[u8], s: usize, k: u8| {
@@ -127,8 +160,12 @@ pub fn evaluate<const D: usize>(
     let mut pending: Vec<usize> = Vec::new();
     for s in 0..=ns {
         if s < ns {
+            let c = Instant::now();
             let block = PairBlock::find(&local, &phys.kernel, s);
+            lap(&mut times.find_pairs, c);
+            let c = Instant::now();
             block.density(&local, &mut work);
+            lap(&mut times.density, c);
             stats.pairs += block.len() as u64;
             live_pairs += block.len();
             stats.peak_pairs = stats.peak_pairs.max(live_pairs);
@@ -150,7 +187,9 @@ pub fn evaluate<const D: usize>(
                         .all(|&g| pairs_done(&pair_stage, g, next))
                     && deps.owner_slabs[t].iter().all(|&o| slab_stage[o] >= next);
                 if ready {
+                    let c = Instant::now();
                     finish_slab(&mut local, &mut work, &deps, phys, t, next);
+                    lap(&mut times.finish, c);
                     slab_stage[t] = next;
                     progress = true;
                 }
@@ -165,10 +204,13 @@ pub fn evaluate<const D: usize>(
                     continue;
                 }
                 let block = blocks[t].as_ref().expect("live block");
+                let c = Instant::now();
                 if next == GRADIENT {
                     block.gradient(&local, &mut work);
+                    lap(&mut times.gradient, c);
                 } else {
                     block.force(&local, &phys.av, &mut work);
+                    lap(&mut times.force, c);
                     if window == Window::Sweep {
                         live_pairs -= block.len();
                         blocks[t] = None;
@@ -188,7 +230,10 @@ pub fn evaluate<const D: usize>(
         "sweep left slabs unfinished: a dependency cycle"
     );
     stats.peak_window_bytes = stats.peak_pairs * BYTES_PER_PAIR;
+    let c = Instant::now();
     write_back(parts, &local, &work);
+    lap(&mut times.finish, c);
+    stats.times = times;
     stats
 }
 

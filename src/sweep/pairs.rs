@@ -1,12 +1,13 @@
 //! One block of the sweep's interaction window: the pairs whose first partner lies in one
 //! x-slab (the second in the same or the previous slab), found once from the grid's half
-//! stencil, and the three sums gathered from them in parallel without write conflicts.
+//! stencil, and the three sums accumulated from them in parallel without write conflicts
+//! (each task into its own buffer over the block's particles, merged afterwards).
 
 use rayon::prelude::*;
 
 use crate::kernel::Kernel;
 use crate::physics::artificial_viscosity::ArtificialViscosity;
-use crate::physics::hydro::{ForceSide, PairForce, force_pair, gradient_pair};
+use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
 use crate::sweep::local::{Local, Work};
 
 /// An interacting pair with its kernel values, computed once and reused by all three sums.
@@ -22,26 +23,19 @@ pub struct Pair {
     pub f: f64,
 }
 
-/// Bytes one stored pair costs in the window (pair + its place in the by-j index).
-pub const BYTES_PER_PAIR: usize = std::mem::size_of::<Pair>() + std::mem::size_of::<u32>();
+/// Bytes one stored pair costs in the window.
+pub const BYTES_PER_PAIR: usize = std::mem::size_of::<Pair>();
 
-/// Particles per parallel task when finding pairs or gathering sums.
+/// Particles per parallel task when finding pairs.
 const GRAIN: usize = 64;
 
-/// The pairs of x-slab `slab`, indexed both by first partner (contiguous) and by second.
+/// The pairs of x-slab `slab`, in the order of their first partner.
 pub struct PairBlock {
     pub slab: usize,
-    /// Local range of the slab's particles (the i's).
-    i_start: usize,
-    i_end: usize,
-    /// Start of the previous slab: the j's lie in `j_start..i_end`.
+    /// Start of the previous slab: every partner lies in `j_start..i_end`.
     j_start: usize,
+    i_end: usize,
     pub pairs: Vec<Pair>,
-    /// `pairs[i_off[i − i_start]..i_off[i − i_start + 1]]` have first partner i.
-    i_off: Vec<u32>,
-    /// `j_perm[j_off[j − j_start]..j_off[j − j_start + 1]]` index the pairs with second partner j.
-    j_off: Vec<u32>,
-    j_perm: Vec<u32>,
 }
 
 /// Offsets of the half stencil: the neighbour cells with a smaller x-major index, i.e. the
@@ -65,6 +59,63 @@ fn half_stencil<const D: usize>() -> Vec<[isize; D]> {
     out
 }
 
+/// Per-particle sums of one stage, accumulated privately by each task and then merged.
+trait Accumulator: Copy + Send + Sync {
+    fn zero() -> Self;
+    fn add(&mut self, o: &Self);
+}
+
+impl Accumulator for (f64, u32) {
+    fn zero() -> Self {
+        (0.0, 0)
+    }
+    fn add(&mut self, o: &Self) {
+        self.0 += o.0;
+        self.1 += o.1;
+    }
+}
+
+impl<const D: usize> Accumulator for [[f64; D]; D] {
+    fn zero() -> Self {
+        [[0.0; D]; D]
+    }
+    fn add(&mut self, o: &Self) {
+        for a in 0..D {
+            for b in 0..D {
+                self[a][b] += o[a][b];
+            }
+        }
+    }
+}
+
+/// Force-stage sums: acceleration, du/dt, viscous heating, largest signal velocity.
+#[derive(Clone, Copy, Debug)]
+struct ForceSum<const D: usize> {
+    acc: [f64; D],
+    du: f64,
+    diss: f64,
+    vsig: f64,
+}
+
+impl<const D: usize> Accumulator for ForceSum<D> {
+    fn zero() -> Self {
+        Self {
+            acc: [0.0; D],
+            du: 0.0,
+            diss: 0.0,
+            vsig: 0.0,
+        }
+    }
+    fn add(&mut self, o: &Self) {
+        for d in 0..D {
+            self.acc[d] += o.acc[d];
+        }
+        self.du += o.du;
+        self.diss += o.diss;
+        self.vsig = self.vsig.max(o.vsig);
+    }
+}
+
 impl PairBlock {
     /// Finds every pair with first partner in slab `slab` and the second in the same cell
     /// (lower index), a lower neighbour cell of the same slab, or the previous slab.
@@ -80,107 +131,87 @@ impl PairBlock {
         let stencil = half_stencil::<D>();
         let support2 = kernel.support() * kernel.support();
         let grid = &local.grid;
+        let pos = &local.pos;
 
-        let groups: Vec<(Vec<Pair>, Vec<u32>)> = (i_start..i_end)
+        let groups: Vec<Vec<Pair>> = (i_start..i_end)
             .into_par_iter()
             .step_by(GRAIN)
             .map(|g0| {
                 let g1 = (g0 + GRAIN).min(i_end);
                 let mut pairs = Vec::new();
-                let mut counts = Vec::with_capacity(g1 - g0);
+                // Candidate ranges: the particle's own cell below it, then the stencil cells.
+                let mut ranges: Vec<(usize, usize)> = Vec::with_capacity(stencil.len() + 1);
+                let mut ranges_cell = usize::MAX;
                 for i in g0..g1 {
-                    let before = pairs.len();
-                    let xi = local.position(i);
-                    let gi = local.is_ghost[i];
                     let c = local.cell[i] as usize;
-                    let visit = |j: usize, pairs: &mut Vec<Pair>| {
-                        if gi && local.is_ghost[j] {
-                            return;
-                        }
-                        let mut r2 = 0.0;
-                        for d in 0..D {
-                            let dx = xi[d] - local.pos[d][j];
-                            r2 += dx * dx;
-                        }
-                        if r2 < support2 {
-                            let r = r2.sqrt();
-                            let (w, f) = kernel.w_and_f(r);
-                            pairs.push(Pair {
-                                i: i as u32,
-                                j: j as u32,
-                                r,
-                                w,
-                                f,
-                            });
-                        }
-                    };
-                    for j in local.cell_start[c] as usize..i {
-                        visit(j, &mut pairs);
-                    }
-                    let ci = cell_coords(grid.n, c);
-                    for o in &stencil {
-                        let mut nc = [0usize; D];
-                        let mut inside = true;
-                        for d in 0..D {
-                            let x = ci[d] as isize + o[d];
-                            if x < 0 || x >= grid.n[d] as isize {
-                                inside = false;
-                                break;
+                    if c != ranges_cell {
+                        ranges_cell = c;
+                        ranges.clear();
+                        let ci = cell_coords(grid.n, c);
+                        for o in &stencil {
+                            let mut nc = [0usize; D];
+                            let mut inside = true;
+                            for d in 0..D {
+                                let x = ci[d] as isize + o[d];
+                                if x < 0 || x >= grid.n[d] as isize {
+                                    inside = false;
+                                    break;
+                                }
+                                nc[d] = x as usize;
                             }
-                            nc[d] = x as usize;
-                        }
-                        if !inside {
-                            continue;
-                        }
-                        let cc = grid.index(nc);
-                        for j in local.cell_start[cc] as usize..local.cell_start[cc + 1] as usize {
-                            visit(j, &mut pairs);
+                            if inside {
+                                let cc = grid.index(nc);
+                                let (a, b) = (
+                                    local.cell_start[cc] as usize,
+                                    local.cell_start[cc + 1] as usize,
+                                );
+                                if a < b {
+                                    ranges.push((a, b));
+                                }
+                            }
                         }
                     }
-                    counts.push((pairs.len() - before) as u32);
+                    let xi: [f64; D] = std::array::from_fn(|d| pos[d][i]);
+                    let gi = local.is_ghost[i];
+                    let own = (local.cell_start[c] as usize, i);
+                    for &(a, b) in std::iter::once(&own).chain(ranges.iter()) {
+                        let len = b - a;
+                        let xs: [&[f64]; D] = std::array::from_fn(|d| &pos[d][a..b]);
+                        let ghosts = &local.is_ghost[a..b];
+                        for k in 0..len {
+                            let mut r2 = 0.0;
+                            for d in 0..D {
+                                let dx = xi[d] - xs[d][k];
+                                r2 += dx * dx;
+                            }
+                            if r2 < support2 && !(gi && ghosts[k]) {
+                                let r = r2.sqrt();
+                                let (w, f) = kernel.w_and_f(r);
+                                pairs.push(Pair {
+                                    i: i as u32,
+                                    j: (a + k) as u32,
+                                    r,
+                                    w,
+                                    f,
+                                });
+                            }
+                        }
+                    }
                 }
-                (pairs, counts)
+                pairs
             })
             .collect();
 
-        let total: usize = groups.iter().map(|g| g.0.len()).sum();
+        let total: usize = groups.iter().map(Vec::len).sum();
         let mut pairs = Vec::with_capacity(total);
-        let mut i_off = Vec::with_capacity(i_end - i_start + 1);
-        i_off.push(0u32);
-        for (p, counts) in groups {
-            pairs.extend_from_slice(&p);
-            for c in counts {
-                let last = *i_off.last().unwrap();
-                i_off.push(last + c);
-            }
+        for g in groups {
+            pairs.extend_from_slice(&g);
         }
-
-        // Counting sort of the pairs by second partner.
-        let nj = i_end - j_start;
-        let mut j_off = vec![0u32; nj + 1];
-        for p in &pairs {
-            j_off[p.j as usize - j_start + 1] += 1;
-        }
-        for k in 0..nj {
-            j_off[k + 1] += j_off[k];
-        }
-        let mut next = j_off.clone();
-        let mut j_perm = vec![0u32; pairs.len()];
-        for (idx, p) in pairs.iter().enumerate() {
-            let slot = &mut next[p.j as usize - j_start];
-            j_perm[*slot as usize] = idx as u32;
-            *slot += 1;
-        }
-
         Self {
             slab,
-            i_start,
-            i_end,
             j_start,
+            i_end,
             pairs,
-            i_off,
-            j_off,
-            j_perm,
         }
     }
 
@@ -192,89 +223,78 @@ impl PairBlock {
         self.pairs.is_empty()
     }
 
-    /// Pairs with first partner `k` (empty if `k` is not in the block's slab).
-    #[inline]
-    fn as_first(&self, k: usize) -> &[Pair] {
-        if k < self.i_start {
-            return &[];
-        }
-        let o = k - self.i_start;
-        &self.pairs[self.i_off[o] as usize..self.i_off[o + 1] as usize]
-    }
-
-    /// Indices of the pairs with second partner `k`.
-    #[inline]
-    fn as_second(&self, k: usize) -> &[u32] {
-        let o = k - self.j_start;
-        &self.j_perm[self.j_off[o] as usize..self.j_off[o + 1] as usize]
-    }
-
-    /// Runs `f(k, work_k)` in parallel for every particle touched by this block.
-    fn for_each_touched<const D: usize, F>(&self, work: &mut [Work<D>], f: F)
+    /// Runs `f` on every pair, each task adding the two partners' contributions into its own
+    /// buffer over the block's particles (no write conflicts, streaming access), then merges
+    /// the buffers into `work` with `merge`.
+    fn scatter<const D: usize, A, F, M>(&self, work: &mut [Work<D>], f: F, merge: M)
     where
-        F: Fn(usize, &mut Work<D>) + Sync + Send,
+        A: Accumulator,
+        F: Fn(&Pair) -> (A, A) + Sync,
+        M: Fn(&mut Work<D>, &A) + Sync,
     {
+        let n = self.i_end - self.j_start;
+        if self.pairs.is_empty() {
+            return;
+        }
+        let tasks = rayon::current_num_threads().max(1);
+        let chunk = self.pairs.len().div_ceil(tasks).max(4096);
+        let run = |pairs: &[Pair]| {
+            let mut buf = vec![A::zero(); n];
+            for p in pairs {
+                let (ci, cj) = f(p);
+                buf[p.i as usize - self.j_start].add(&ci);
+                buf[p.j as usize - self.j_start].add(&cj);
+            }
+            buf
+        };
+        let bufs: Vec<Vec<A>> = if self.pairs.len() <= chunk {
+            vec![run(&self.pairs)]
+        } else {
+            self.pairs.par_chunks(chunk).map(run).collect()
+        };
         work[self.j_start..self.i_end]
             .par_iter_mut()
             .enumerate()
-            .with_min_len(GRAIN)
-            .for_each(|(o, wk)| f(self.j_start + o, wk));
+            .with_min_len(1024)
+            .for_each(|(o, wk)| {
+                for b in &bufs {
+                    merge(wk, &b[o]);
+                }
+            });
     }
 
     /// First sum, Eq. (5): ρ_k += Σ m W over this block's pairs.
     pub fn density<const D: usize>(&self, local: &Local<D>, work: &mut [Work<D>]) {
         let m = &local.mass;
-        self.for_each_touched(work, |k, wk| {
-            let mut rho = 0.0;
-            let first = self.as_first(k);
-            for p in first {
-                rho += m[p.j as usize] * p.w;
-            }
-            let second = self.as_second(k);
-            for &q in second {
-                let p = &self.pairs[q as usize];
-                rho += m[p.i as usize] * p.w;
-            }
-            wk.rho += rho;
-            wk.interactions += (first.len() + second.len()) as u32;
-        });
+        self.scatter(
+            work,
+            |p| ((m[p.j as usize] * p.w, 1u32), (m[p.i as usize] * p.w, 1u32)),
+            |wk, a: &(f64, u32)| {
+                wk.rho += a.0;
+                wk.interactions += a.1;
+            },
+        );
     }
 
     /// Second sum, Eq. (10): the velocity gradient, needing every partner's density.
     pub fn gradient<const D: usize>(&self, local: &Local<D>, work: &mut [Work<D>]) {
-        let dx_of = |p: &Pair| -> [f64; D] {
-            std::array::from_fn(|d| local.pos[d][p.i as usize] - local.pos[d][p.j as usize])
-        };
-        self.for_each_touched(work, |k, wk| {
-            let mut acc = [[0.0; D]; D];
-            let mut add = |g: [[f64; D]; D], s: f64| {
-                for a in 0..D {
-                    for b in 0..D {
-                        acc[a][b] += s * g[a][b];
-                    }
-                }
-            };
-            for p in self.as_first(k) {
+        self.scatter(
+            work,
+            |p| {
                 let (i, j) = (p.i as usize, p.j as usize);
-                let g = gradient_pair(&dx_of(p), p.f, &local.velocity(i), &local.velocity(j));
-                add(g, local.mass[j] / local.rho[j]);
-            }
-            for &q in self.as_second(k) {
-                let p = &self.pairs[q as usize];
-                let (i, j) = (p.i as usize, p.j as usize);
-                let g = gradient_pair(&dx_of(p), p.f, &local.velocity(i), &local.velocity(j));
-                add(g, local.mass[i] / local.rho[i]);
-            }
-            for a in 0..D {
-                for b in 0..D {
-                    wk.grad[a][b] += acc[a][b];
-                }
-            }
-        });
+                let dx: [f64; D] = std::array::from_fn(|d| local.pos[d][i] - local.pos[d][j]);
+                let g = gradient_pair(&dx, p.f, &local.velocity(i), &local.velocity(j));
+                let (si, sj) = (local.mass[j] / local.rho[j], local.mass[i] / local.rho[i]);
+                let scale = |s: f64| -> [[f64; D]; D] {
+                    std::array::from_fn(|a| std::array::from_fn(|b| s * g[a][b]))
+                };
+                (scale(si), scale(sj))
+            },
+            |wk, g: &[[f64; D]; D]| wk.grad.add(g),
+        );
     }
 
-    /// Third sum: accelerations (Eq. 7 + viscosity) and du/dt. Each pair is evaluated once
-    /// into a buffer, then gathered by both partners.
+    /// Third sum: accelerations (Eq. 7 + viscosity) and du/dt.
     pub fn force<const D: usize>(
         &self,
         local: &Local<D>,
@@ -288,45 +308,38 @@ impl PairBlock {
             cs: local.cs[k],
             balsara: local.balsara[k],
         };
-        let mut out: Vec<PairForce<D>> = Vec::new();
-        self.pairs
-            .par_iter()
-            .with_min_len(GRAIN)
-            .map(|p| {
+        let m = &local.mass;
+        self.scatter(
+            work,
+            |p| {
                 let (i, j) = (p.i as usize, p.j as usize);
                 let dx: [f64; D] = std::array::from_fn(|d| local.pos[d][i] - local.pos[d][j]);
-                force_pair(&dx, p.r, p.f, &side(i), &side(j), av)
-            })
-            .collect_into_vec(&mut out);
-        let m = &local.mass;
-        self.for_each_touched(work, |k, wk| {
-            let first = self.as_first(k);
-            let base = if first.is_empty() {
-                0
-            } else {
-                self.i_off[k - self.i_start] as usize
-            };
-            for (o, p) in first.iter().enumerate() {
-                let pf = &out[base + o];
-                let mj = m[p.j as usize];
+                let pf = force_pair(&dx, p.r, p.f, &side(i), &side(j), av);
+                let (mi, mj) = (m[i], m[j]);
+                (
+                    ForceSum {
+                        acc: std::array::from_fn(|d| mj * pf.accel[d]),
+                        du: mj * (pf.work_i + pf.heat_viscous),
+                        diss: mj * pf.heat_viscous,
+                        vsig: pf.vsig,
+                    },
+                    ForceSum {
+                        acc: std::array::from_fn(|d| -mi * pf.accel[d]),
+                        du: mi * (pf.work_j + pf.heat_viscous),
+                        diss: mi * pf.heat_viscous,
+                        vsig: pf.vsig,
+                    },
+                )
+            },
+            |wk, a: &ForceSum<D>| {
                 for d in 0..D {
-                    wk.acc[d] += mj * pf.accel[d];
+                    wk.acc[d] += a.acc[d];
                 }
-                wk.du += mj * (pf.work_i + pf.heat_viscous);
-                wk.diss += mj * pf.heat_viscous;
-                wk.vsig = wk.vsig.max(pf.vsig);
-            }
-            for &q in self.as_second(k) {
-                let pf = &out[q as usize];
-                let mi = m[self.pairs[q as usize].i as usize];
-                for d in 0..D {
-                    wk.acc[d] -= mi * pf.accel[d];
-                }
-                wk.du += mi * (pf.work_j + pf.heat_viscous);
-                wk.diss += mi * pf.heat_viscous;
-                wk.vsig = wk.vsig.max(pf.vsig);
-            }
-        });
+                wk.du += a.du;
+                wk.diss += a.diss;
+                wk.vsig = wk.vsig.max(a.vsig);
+            },
+        );
     }
 }
 
