@@ -67,17 +67,9 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     let phys = Physics {
         kernel: Kernel::<3>::new(h),
         eos: Eos::Ideal { gamma: 5.0 / 3.0 },
-        av: ArtificialViscosity {
-            alpha: 1.0,
-            beta: 2.0,
-            balsara: false,
-        },
+        av: ArtificialViscosity::for_shocks(),
     };
-    let ctl = StepControl {
-        courant: 0.3,
-        force: 0.25,
-        energy: 0.3,
-    };
+    let ctl = StepControl::default();
     let warm = evaluate(&mut p, &bx, &phys, window);
     let start = Instant::now();
     let mut pairs = 0u64;

@@ -21,6 +21,37 @@ pub struct StepControl {
     pub energy: f64,
 }
 
+impl Default for StepControl {
+    /// The problem file's defaults: Courant 0.3, force 0.25, energy 0.3.
+    fn default() -> Self {
+        Self {
+            courant: 0.3,
+            force: 0.25,
+            energy: 0.3,
+        }
+    }
+}
+
+/// v ← v_half + a Δt/2 and, if the energy is evolved, u ← u_half + (du/dt) Δt/2.
+fn half_kick<const D: usize>(
+    p: &mut Particles<D>,
+    v_half: &[Vec<f64>; D],
+    u_half: &[f64],
+    half: f64,
+    evolve_u: bool,
+) {
+    for d in 0..D {
+        for i in 0..p.len() {
+            p.vel[d][i] = v_half[d][i] + half * p.acc[d][i];
+        }
+    }
+    if evolve_u {
+        for i in 0..p.len() {
+            p.u[i] = u_half[i] + half * p.du[i];
+        }
+    }
+}
+
 /// The largest stable global step: min over particles of C_cour h / v_sig, C_force √(h/|a|),
 /// and C_energy u / |du/dt| where the internal energy falls.
 pub fn time_step<const D: usize>(
@@ -72,26 +103,11 @@ pub fn kdk_step<const D: usize>(
     };
     // Reflection flips the half-step velocity too: apply the walls to it.
     bx.enforce(&mut p.pos, &mut v_half);
-    for d in 0..D {
-        for i in 0..n {
-            p.vel[d][i] = v_half[d][i] + half * p.acc[d][i];
-        }
-    }
-    if evolve_u {
-        for i in 0..n {
-            p.u[i] = u_half[i] + half * p.du[i];
-        }
-    }
+    // Predict with the old accelerations, evaluate, correct with the new ones.
+    half_kick(p, &v_half, &u_half, half, evolve_u);
     let stats = evaluate(p, bx, phys, window);
-    for d in 0..D {
-        for i in 0..n {
-            p.vel[d][i] = v_half[d][i] + half * p.acc[d][i];
-        }
-    }
+    half_kick(p, &v_half, &u_half, half, evolve_u);
     if evolve_u {
-        for i in 0..n {
-            p.u[i] = u_half[i] + half * p.du[i];
-        }
         // Pressure and sound speed from the corrected energy (density is unchanged).
         for i in 0..n {
             let (pr, cs) = phys.eos.pressure_sound_speed(p.rho[i], p.u[i]);

@@ -41,17 +41,9 @@ fn check<const D: usize>(n: usize, h_factor: f64) {
     let phys = Physics {
         kernel: Kernel::<D>::new(h),
         eos: Eos::Ideal { gamma: 1.4 },
-        av: ArtificialViscosity {
-            alpha: 1.0,
-            beta: 2.0,
-            balsara: false,
-        },
+        av: ArtificialViscosity::for_shocks(),
     };
-    let ctl = StepControl {
-        courant: 0.3,
-        force: 0.25,
-        energy: 0.3,
-    };
+    let ctl = StepControl::default();
     let mut p = turbulent_box::<D>(n, 42);
     evaluate(&mut p, &bx, &phys, Window::Sweep);
     let start = p.totals();

@@ -25,6 +25,15 @@ impl Default for ArtificialViscosity {
 }
 
 impl ArtificialViscosity {
+    /// The usual setting for shocks: α = 1, β = 2, no switch.
+    pub fn for_shocks() -> Self {
+        Self {
+            alpha: 1.0,
+            beta: 2.0,
+            balsara: false,
+        }
+    }
+
     pub fn validate(&self) -> Result<(), String> {
         if !(self.alpha >= 0.0 && self.alpha.is_finite()) {
             return Err(format!(
@@ -90,11 +99,7 @@ mod tests {
 
     #[test]
     fn only_approaching_pairs_are_damped() {
-        let av = ArtificialViscosity {
-            alpha: 1.0,
-            beta: 2.0,
-            balsara: false,
-        };
+        let av = ArtificialViscosity::for_shocks();
         let (pi, vsig) = av.pi(-0.5, 1.0, (1.0, 1.0), (1.0, 1.0), 1.0);
         // w = −0.5, v_sig = 2 + 1 = 3, Π = 3 × 0.5 / 2.
         assert!((pi - 0.75).abs() < 1e-15);

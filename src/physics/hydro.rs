@@ -118,11 +118,7 @@ mod tests {
         let (mi, mj) = (1.3, 0.7);
         let a = side([1.0, -0.5], 1.1, 2.0);
         let b = side([-0.3, 0.4], 0.8, 1.5);
-        let av = ArtificialViscosity {
-            alpha: 1.0,
-            beta: 2.0,
-            balsara: false,
-        };
+        let av = ArtificialViscosity::for_shocks();
         let pf = force_pair(&dx, r, k.f(r), &a, &b, &av);
         assert!(pf.heat_viscous > 0.0, "approaching pair must heat");
         // dE/dt = m_i v_i·a_i + m_j v_j·a_j + m_i du_i + m_j du_j = 0.
