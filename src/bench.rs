@@ -64,11 +64,11 @@ pub fn uniform_box(n: usize, neighbours: f64, seed: u64) -> (Particles<3>, SimBo
 /// Runs `steps` KDK steps (after one warm-up evaluation) with the current rayon pool.
 pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Result<BenchResult> {
     let (mut p, bx, h) = uniform_box(n, neighbours, 7);
-    let phys = Physics {
-        kernel: Kernel::<3>::new(h),
-        eos: Eos::Ideal { gamma: 5.0 / 3.0 },
-        av: ArtificialViscosity::for_shocks(),
-    };
+    let phys = Physics::hydro(
+        Kernel::<3>::new(h),
+        Eos::Ideal { gamma: 5.0 / 3.0 },
+        ArtificialViscosity::for_shocks(),
+    );
     let ctl = StepControl::default();
     let warm = evaluate(&mut p, &bx, &phys, window);
     let start = Instant::now();

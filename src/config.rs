@@ -10,6 +10,8 @@ use serde::{Deserialize, Serialize};
 use crate::boundary::BoundaryKind;
 use crate::physics::artificial_viscosity::ArtificialViscosity;
 use crate::physics::eos::Eos;
+use crate::physics::gravity::PointMass;
+use crate::physics::viscosity::ViscosityModel;
 
 /// A whole problem file. Every table rejects keys it does not know.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -20,8 +22,14 @@ pub struct Config {
     pub eos: Eos,
     #[serde(default)]
     pub artificial_viscosity: ArtificialViscosity,
+    /// Physical shear viscosity, Eqs. (8)–(10): `nu` or `alpha`, optional `bulk`.
+    #[serde(default)]
+    pub viscosity: ViscosityModel,
+    /// Central point mass: `gm`, optional `softening` and `accretion_radius`.
+    pub gravity: Option<PointMass>,
     #[serde(default)]
     pub boundary: BoundarySection,
+    #[serde(default)]
     pub time: TimeSection,
     #[serde(default)]
     pub output: OutputSection,
@@ -32,6 +40,7 @@ pub struct Config {
     pub sod: Option<SodParams>,
     pub advection: Option<AdvectionParams>,
     pub sedov: Option<SedovParams>,
+    pub ring: Option<RingParams>,
     pub initial: Option<InitialFileParams>,
 }
 
@@ -44,6 +53,8 @@ pub enum ProblemKind {
     Advection,
     /// Sedov–Taylor point blast.
     Sedov,
+    /// Viscously spreading ring around a point mass (Lüst 1952, Pringle 1981).
+    Ring,
     /// Particles read from a CSV file (`[initial] file`).
     File,
 }
@@ -54,6 +65,7 @@ impl ProblemKind {
             ProblemKind::Sod => "sod",
             ProblemKind::Advection => "advection",
             ProblemKind::Sedov => "sedov",
+            ProblemKind::Ring => "ring",
             ProblemKind::File => "file",
         }
     }
@@ -96,7 +108,8 @@ pub struct BoundarySection {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeSection {
-    pub end: f64,
+    /// End time (a ring problem derives it from `ring.tau_end` if absent).
+    pub end: Option<f64>,
     /// Courant factor: Δt ≤ courant · h / v_sig.
     #[serde(default = "default_courant")]
     pub courant: f64,
@@ -106,8 +119,24 @@ pub struct TimeSection {
     /// Energy factor: Δt ≤ energy · u / |du/dt| where u decreases.
     #[serde(default = "default_energy")]
     pub energy: f64,
+    /// Viscous factor: Δt ≤ viscous · h² / ν.
+    #[serde(default = "default_viscous")]
+    pub viscous: f64,
     #[serde(default = "default_max_steps")]
     pub max_steps: u64,
+}
+
+impl Default for TimeSection {
+    fn default() -> Self {
+        Self {
+            end: None,
+            courant: default_courant(),
+            force: default_force(),
+            energy: default_energy(),
+            viscous: default_viscous(),
+            max_steps: default_max_steps(),
+        }
+    }
 }
 
 fn default_courant() -> f64 {
@@ -118,6 +147,9 @@ fn default_force() -> f64 {
 }
 fn default_energy() -> f64 {
     0.3
+}
+fn default_viscous() -> f64 {
+    0.4
 }
 fn default_max_steps() -> u64 {
     10_000_000
@@ -246,6 +278,36 @@ impl Default for SedovParams {
             rho0: 1.0,
             p0: 1e-6,
             length: 1.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RingParams {
+    /// Ring mass M.
+    pub mass: f64,
+    /// Ring radius R0.
+    pub r0: f64,
+    /// Start at τ0 = 12 ν t0 / R0² (a Gaussian ring of width σ has τ0 = 2σ²/R0²).
+    pub tau_start: f64,
+    /// End at this τ.
+    pub tau_end: f64,
+    /// Snapshot (and analysis) times, as τ.
+    pub output_tau: Vec<f64>,
+    /// Particles are placed where Σ exceeds this fraction of its peak.
+    pub cutoff: f64,
+}
+
+impl Default for RingParams {
+    fn default() -> Self {
+        Self {
+            mass: 1.0,
+            r0: 1.0,
+            tau_start: 0.016,
+            tau_end: 0.128,
+            output_tau: vec![0.032, 0.064, 0.128],
+            cutoff: 1e-3,
         }
     }
 }
@@ -389,11 +451,22 @@ impl Config {
         self.artificial_viscosity
             .validate()
             .map_err(|e| anyhow::anyhow!("key `{}`", e.replacen(" must", "`: must", 1)))?;
-        positive("time.end", self.time.end)?;
+        match self.time.end {
+            Some(end) => positive("time.end", end)?,
+            None if self.problem.kind == ProblemKind::Ring => {}
+            None => bail!("key `time.end`: missing"),
+        }
+        if let Some(g) = &self.gravity {
+            g.validate().map_err(|e| anyhow::anyhow!(e))?;
+        }
+        self.viscosity
+            .validate(self.gravity.is_some())
+            .map_err(|e| anyhow::anyhow!(e))?;
         for (k, v) in [
             ("time.courant", self.time.courant),
             ("time.force", self.time.force),
             ("time.energy", self.time.energy),
+            ("time.viscous", self.time.viscous),
         ] {
             positive(k, v)?;
             if v > 1.0 {
@@ -431,6 +504,7 @@ impl Config {
                 ProblemKind::Advection,
             ),
             ("sedov", self.sedov.is_some(), ProblemKind::Sedov),
+            ("ring", self.ring.is_some(), ProblemKind::Ring),
             ("initial", self.initial.is_some(), ProblemKind::File),
         ] {
             if present && kind != owner {
@@ -523,7 +597,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(c.particles.n, Some(800));
-        assert_eq!(c.time.end, 0.15);
+        assert_eq!(c.time.end, Some(0.15));
         assert_eq!(c.boundary.x, Some(BoundaryKind::Periodic));
     }
 

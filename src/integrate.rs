@@ -6,11 +6,12 @@
 //! 1. kick:  v ← v + a Δt/2,  u ← u + (du/dt) Δt/2;
 //! 2. drift: x ← x + v Δt (then wrap or reflect at the box);
 //! 3. predict v and u at the end of the step (v + a Δt/2) for the velocity-dependent terms;
-//! 4. evaluate: one sweep gives the new a and du/dt;
+//! 4. evaluate: one sweep gives the new a and du/dt, plus external gravity;
 //! 5. kick:  v ← v_half + a Δt/2, u ← u_half + (du/dt) Δt/2.
 
 use crate::boundary::SimBox;
 use crate::particles::Particles;
+use crate::physics::eos::cylindrical_radius;
 use crate::sweep::{Physics, SweepStats, Window, evaluate};
 
 /// Step-limiter factors.
@@ -19,17 +20,40 @@ pub struct StepControl {
     pub courant: f64,
     pub force: f64,
     pub energy: f64,
+    /// Δt ≤ viscous · h² / ν (explicit diffusion limit).
+    pub viscous: f64,
 }
 
 impl Default for StepControl {
-    /// The problem file's defaults: Courant 0.3, force 0.25, energy 0.3.
+    /// The problem file's defaults: Courant 0.3, force 0.25, energy 0.3, viscous 0.4.
     fn default() -> Self {
         Self {
             courant: 0.3,
             force: 0.25,
             energy: 0.3,
+            viscous: 0.4,
         }
     }
+}
+
+/// The right-hand sides: one sweep (hydrodynamics and viscosity), then the external
+/// gravity of the central mass added to the accelerations.
+pub fn rhs<const D: usize>(
+    p: &mut Particles<D>,
+    bx: &SimBox<D>,
+    phys: &Physics<D>,
+    window: Window,
+) -> SweepStats {
+    let stats = evaluate(p, bx, phys, window);
+    if let Some(g) = &phys.gravity {
+        for i in 0..p.len() {
+            let a = g.acceleration(&p.position(i));
+            for d in 0..D {
+                p.acc[d][i] += a[d];
+            }
+        }
+    }
+    stats
 }
 
 /// v ← v_half + a Δt/2 and, if the energy is evolved, u ← u_half + (du/dt) Δt/2.
@@ -53,7 +77,7 @@ fn half_kick<const D: usize>(
 }
 
 /// The largest stable global step: min over particles of C_cour h / v_sig, C_force √(h/|a|),
-/// and C_energy u / |du/dt| where the internal energy falls.
+/// C_energy u / |du/dt| where the internal energy falls, and C_visc h² / ν.
 pub fn time_step<const D: usize>(
     p: &Particles<D>,
     h: f64,
@@ -71,6 +95,9 @@ pub fn time_step<const D: usize>(
         }
         if evolve_u && p.du[i] < 0.0 && p.u[i] > 0.0 {
             dt = dt.min(ctl.energy * p.u[i] / -p.du[i]);
+        }
+        if p.nu[i] > 0.0 {
+            dt = dt.min(ctl.viscous * h * h / p.nu[i]);
         }
     }
     dt
@@ -105,12 +132,13 @@ pub fn kdk_step<const D: usize>(
     bx.enforce(&mut p.pos, &mut v_half);
     // Predict with the old accelerations, evaluate, correct with the new ones.
     half_kick(p, &v_half, &u_half, half, evolve_u);
-    let stats = evaluate(p, bx, phys, window);
+    let stats = rhs(p, bx, phys, window);
     half_kick(p, &v_half, &u_half, half, evolve_u);
     if evolve_u {
         // Pressure and sound speed from the corrected energy (density is unchanged).
         for i in 0..n {
-            let (pr, cs) = phys.eos.pressure_sound_speed(p.rho[i], p.u[i]);
+            let radius = cylindrical_radius(&p.position(i));
+            let (pr, cs) = phys.eos.pressure_sound_speed(p.rho[i], p.u[i], radius);
             p.p[i] = pr;
             p.cs[i] = cs;
         }

@@ -1,5 +1,7 @@
 //! The particle store: structure-of-arrays `Vec<f64>`s for every per-particle quantity, and
-//! the conserved totals (mass, momentum, energy) computed from them.
+//! the conserved totals (mass, momentum, angular momentum, energy) computed from them.
+
+use crate::physics::gravity::PointMass;
 
 /// All real (time-integrated) particles of one process, in structure-of-arrays layout.
 ///
@@ -29,6 +31,8 @@ pub struct Particles<const D: usize> {
     pub vsig: Vec<f64>,
     /// Velocity gradient V_αβ = ∂v_α/∂x_β of Eq. (10), stored `vgrad[α][β][i]`.
     pub vgrad: [[Vec<f64>; D]; D],
+    /// Kinematic shear viscosity ν used in the last evaluation (0 without viscosity).
+    pub nu: Vec<f64>,
     /// Number of neighbours each particle interacted with in the last evaluation.
     pub interactions: Vec<u32>,
 }
@@ -59,6 +63,7 @@ impl<const D: usize> Particles<D> {
             diss: Vec::new(),
             vsig: Vec::new(),
             vgrad: std::array::from_fn(|_| vecs()),
+            nu: Vec::new(),
             interactions: Vec::new(),
         }
     }
@@ -91,6 +96,7 @@ impl<const D: usize> Particles<D> {
             &mut self.du,
             &mut self.diss,
             &mut self.vsig,
+            &mut self.nu,
         ] {
             v.push(0.0);
         }
@@ -105,14 +111,17 @@ impl<const D: usize> Particles<D> {
         std::array::from_fn(|d| self.vel[d][i])
     }
 
-    /// Mass, momentum and energy of the whole set.
-    pub fn totals(&self) -> Totals<D> {
+    /// Mass, momentum, angular momentum and energy of the whole set, with the potential
+    /// energy in the field of `gravity` if given.
+    pub fn totals(&self, gravity: Option<&PointMass>) -> Totals<D> {
         let mut t = Totals {
             mass: 0.0,
             momentum: [0.0; D],
             momentum_scale: 0.0,
+            angular_momentum: 0.0,
             kinetic: 0.0,
             internal: 0.0,
+            potential: 0.0,
         };
         for i in 0..self.len() {
             let m = self.mass[i];
@@ -126,8 +135,56 @@ impl<const D: usize> Particles<D> {
             t.mass += m;
             t.kinetic += 0.5 * m * v2;
             t.internal += m * self.u[i];
+            t.angular_momentum += m * self.angular_momentum_z(i);
+            if let Some(g) = gravity {
+                t.potential += m * g.potential(&self.position(i));
+            }
         }
         t
+    }
+
+    /// Specific angular momentum about the z axis, x v_y − y v_x (0 in 1D).
+    #[inline]
+    pub fn angular_momentum_z(&self, i: usize) -> f64 {
+        if D < 2 {
+            0.0
+        } else {
+            self.pos[0][i] * self.vel[1][i] - self.pos[1][i] * self.vel[0][i]
+        }
+    }
+
+    /// Keeps the particles with `keep[i]` true, in order, in every array.
+    pub fn retain(&mut self, keep: &[bool]) {
+        fn filter<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
+            let mut k = 0;
+            v.retain(|_| {
+                k += 1;
+                keep[k - 1]
+            });
+        }
+        filter(&mut self.id, keep);
+        for d in 0..D {
+            filter(&mut self.pos[d], keep);
+            filter(&mut self.vel[d], keep);
+            filter(&mut self.acc[d], keep);
+            for b in 0..D {
+                filter(&mut self.vgrad[d][b], keep);
+            }
+        }
+        for v in [
+            &mut self.mass,
+            &mut self.u,
+            &mut self.rho,
+            &mut self.p,
+            &mut self.cs,
+            &mut self.du,
+            &mut self.diss,
+            &mut self.vsig,
+            &mut self.nu,
+        ] {
+            filter(v, keep);
+        }
+        filter(&mut self.interactions, keep);
     }
 }
 
@@ -139,13 +196,18 @@ pub struct Totals<const D: usize> {
     /// Σ m|v|: the scale against which a momentum change is relative (the total momentum
     /// itself may be zero).
     pub momentum_scale: f64,
+    /// Σ m (x v_y − y v_x).
+    pub angular_momentum: f64,
     pub kinetic: f64,
     pub internal: f64,
+    /// Σ m Φ in the external field (0 without one).
+    pub potential: f64,
 }
 
 impl<const D: usize> Totals<D> {
+    /// Kinetic + internal + potential energy.
     pub fn energy(&self) -> f64 {
-        self.kinetic + self.internal
+        self.kinetic + self.internal + self.potential
     }
 
     /// Relative drifts of `self` against a reference `start`: (mass, momentum, energy).
@@ -176,12 +238,27 @@ mod tests {
         let mut p = Particles::<2>::new();
         p.push(0, [0.0, 0.0], [1.0, 0.0], 2.0, 0.5);
         p.push(1, [1.0, 0.0], [-1.0, 2.0], 1.0, 1.0);
-        let t = p.totals();
+        let t = p.totals(None);
         assert_eq!(t.mass, 3.0);
+        assert_eq!(t.angular_momentum, 1.0 * 2.0);
         assert_eq!(t.momentum, [1.0, 2.0]);
         assert_eq!(t.kinetic, 0.5 * 2.0 + 0.5 * 5.0);
         assert_eq!(t.internal, 2.0);
         let (dm, dp, de) = t.drift_from(&t);
         assert_eq!((dm, dp, de), (0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn retain_keeps_every_array_aligned() {
+        let mut p = Particles::<2>::new();
+        for i in 0..5 {
+            p.push(i, [i as f64, 0.0], [0.0, i as f64], 1.0 + i as f64, 0.0);
+        }
+        p.retain(&[true, false, true, false, true]);
+        assert_eq!(p.id, vec![0, 2, 4]);
+        assert_eq!(p.pos[0], vec![0.0, 2.0, 4.0]);
+        assert_eq!(p.vel[1], vec![0.0, 2.0, 4.0]);
+        assert_eq!(p.mass, vec![1.0, 3.0, 5.0]);
+        assert_eq!(p.nu.len(), 3);
     }
 }

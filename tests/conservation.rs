@@ -38,20 +38,20 @@ fn check<const D: usize>(n: usize, h_factor: f64) {
         kinds: [BoundaryKind::Periodic; D],
     };
     let h = h_factor / n as f64;
-    let phys = Physics {
-        kernel: Kernel::<D>::new(h),
-        eos: Eos::Ideal { gamma: 1.4 },
-        av: ArtificialViscosity::for_shocks(),
-    };
+    let phys = Physics::hydro(
+        Kernel::<D>::new(h),
+        Eos::Ideal { gamma: 1.4 },
+        ArtificialViscosity::for_shocks(),
+    );
     let ctl = StepControl::default();
     let mut p = turbulent_box::<D>(n, 42);
     evaluate(&mut p, &bx, &phys, Window::Sweep);
-    let start = p.totals();
+    let start = p.totals(None);
     let mut prev = start;
     for step in 0..20 {
         let dt = time_step(&p, h, &ctl, true);
         kdk_step(&mut p, &bx, &phys, Window::Sweep, dt);
-        let now = p.totals();
+        let now = p.totals(None);
         let (dm, dp, de) = now.drift_from(&prev);
         // Momentum: every pair adds +m_i m_j X to one partner and −m_j m_i X to the other,
         // so only rounding (~1e-16 per term) remains: the bar is 1e-12 per step.

@@ -100,15 +100,15 @@ fn rel_max_diff(a: &[f64], b: &[f64]) -> f64 {
 }
 
 fn check_sums<const D: usize>(mut p: Particles<D>, bx: &SimBox<D>, h: f64) {
-    let phys = Physics {
-        kernel: Kernel::<D>::new(h),
-        eos: Eos::Ideal { gamma: 5.0 / 3.0 },
-        av: ArtificialViscosity {
+    let phys = Physics::hydro(
+        Kernel::<D>::new(h),
+        Eos::Ideal { gamma: 5.0 / 3.0 },
+        ArtificialViscosity {
             alpha: 1.0,
             beta: 2.0,
             balsara: true,
         },
-    };
+    );
     let mut reference = p.clone();
     full_list_minimum_image(&mut reference, bx, &phys);
     let stats = evaluate(&mut p, bx, &phys, Window::Sweep);
@@ -163,11 +163,11 @@ fn three_sums_equal_full_pair_list_periodic_and_open() {
 #[test]
 fn full_list_window_gives_identical_results_with_more_memory() {
     let bx = unit_box([BoundaryKind::Periodic; 3]);
-    let phys = Physics {
-        kernel: Kernel::<3>::new(0.03),
-        eos: Eos::Isothermal { cs: 1.0 },
-        av: ArtificialViscosity::default(),
-    };
+    let phys = Physics::hydro(
+        Kernel::<3>::new(0.03),
+        Eos::Isothermal { cs: 1.0 },
+        ArtificialViscosity::default(),
+    );
     let mut a = random_set::<3>(4000, false, 9);
     let mut b = a.clone();
     let sa = evaluate(&mut a, &bx, &phys, Window::Sweep);

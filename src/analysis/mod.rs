@@ -3,6 +3,7 @@
 
 pub mod advection;
 pub mod riemann;
+pub mod ring;
 pub mod sedov;
 
 use crate::particles::Particles;
@@ -63,6 +64,65 @@ fn binned(
     (0..nb)
         .filter(|&b| count[b] > 0)
         .map(|b| (lo + (b as f64 + 0.5) * bin, sum[b] / count[b] as f64))
+        .collect()
+}
+
+/// Statistics of the particles' density in one annulus about the origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Annulus {
+    /// Bin centre.
+    pub r: f64,
+    pub count: usize,
+    pub mean: f64,
+    pub min: f64,
+    pub max: f64,
+    /// 10th and 90th percentiles.
+    pub p10: f64,
+    pub p90: f64,
+}
+
+/// Azimuthal averages: the particles' density (in 2D the surface density Σ) in annuli of
+/// width `bin` from the origin out to the farthest particle. Empty annuli report zeros.
+pub fn annulus_stats<const D: usize>(p: &Particles<D>, bin: f64) -> Vec<Annulus> {
+    let radius = |i: usize| {
+        (0..D.min(2))
+            .map(|d| p.pos[d][i].powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let rmax = (0..p.len()).map(radius).fold(0.0, f64::max);
+    let nb = (rmax / bin).floor() as usize + 1;
+    let mut vals: Vec<Vec<f64>> = vec![Vec::new(); nb];
+    for i in 0..p.len() {
+        vals[((radius(i) / bin) as usize).min(nb - 1)].push(p.rho[i]);
+    }
+    vals.into_iter()
+        .enumerate()
+        .map(|(b, mut v)| {
+            let r = (b as f64 + 0.5) * bin;
+            if v.is_empty() {
+                return Annulus {
+                    r,
+                    count: 0,
+                    mean: 0.0,
+                    min: 0.0,
+                    max: 0.0,
+                    p10: 0.0,
+                    p90: 0.0,
+                };
+            }
+            v.sort_by(f64::total_cmp);
+            let q = |f: f64| v[((v.len() - 1) as f64 * f).round() as usize];
+            Annulus {
+                r,
+                count: v.len(),
+                mean: v.iter().sum::<f64>() / v.len() as f64,
+                min: v[0],
+                max: v[v.len() - 1],
+                p10: q(0.1),
+                p90: q(0.9),
+            }
+        })
         .collect()
 }
 

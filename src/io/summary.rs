@@ -37,6 +37,74 @@ pub struct Summary {
     pub peak_rss_bytes: u64,
     pub totals_start: TotalsRecord,
     pub totals_end: TotalsRecord,
+    /// What the central mass accreted (present when an accretion radius is set).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accretion: Option<AccretionLedger>,
+    /// The spreading ring's parameters (ring problems only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ring: Option<crate::problems::ring::RingRecord>,
+}
+
+/// Mass, momentum, angular momentum and energy removed by accretion: with it the
+/// conservation figures stay exact (particles + accreted = initial).
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct AccretionLedger {
+    pub particles: u64,
+    pub mass: f64,
+    pub momentum: Vec<f64>,
+    pub angular_momentum: f64,
+    pub kinetic_energy: f64,
+    pub internal_energy: f64,
+    pub potential_energy: f64,
+}
+
+impl AccretionLedger {
+    /// Removes the particles within `radius` of the centre, books what they carried, and
+    /// returns how many went.
+    pub fn accrete<const D: usize>(
+        &mut self,
+        p: &mut crate::particles::Particles<D>,
+        radius: f64,
+        g: &crate::physics::gravity::PointMass,
+    ) -> usize {
+        let keep: Vec<bool> = (0..p.len())
+            .map(|i| (0..D).map(|d| p.pos[d][i].powi(2)).sum::<f64>() >= radius * radius)
+            .collect();
+        let gone = keep.iter().filter(|&&k| !k).count();
+        if gone == 0 {
+            return 0;
+        }
+        if self.momentum.len() != D {
+            self.momentum = vec![0.0; D];
+        }
+        for i in (0..p.len()).filter(|&i| !keep[i]) {
+            let m = p.mass[i];
+            let v2: f64 = (0..D).map(|d| p.vel[d][i].powi(2)).sum();
+            self.particles += 1;
+            self.mass += m;
+            for d in 0..D {
+                self.momentum[d] += m * p.vel[d][i];
+            }
+            self.angular_momentum += m * p.angular_momentum_z(i);
+            self.kinetic_energy += 0.5 * m * v2;
+            self.internal_energy += m * p.u[i];
+            self.potential_energy += m * g.potential(&p.position(i));
+        }
+        p.retain(&keep);
+        gone
+    }
+
+    /// Adds the ledger to a set of totals (to compare with the start).
+    pub fn add_to<const D: usize>(&self, t: &mut crate::particles::Totals<D>) {
+        t.mass += self.mass;
+        for d in 0..D.min(self.momentum.len()) {
+            t.momentum[d] += self.momentum[d];
+        }
+        t.angular_momentum += self.angular_momentum;
+        t.kinetic += self.kinetic_energy;
+        t.internal += self.internal_energy;
+        t.potential += self.potential_energy;
+    }
 }
 
 /// Relative drifts, end against start.
@@ -50,14 +118,20 @@ pub struct Conservation {
     pub energy: Option<f64>,
     /// Largest single-step momentum drift |ΔP| / Σ m|v|.
     pub momentum_max_per_step: f64,
+    /// |ΔL_z| / |L_z| (2D and 3D, when L_z ≠ 0). SPH's shear viscosity conserves it only
+    /// approximately.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angular_momentum: Option<f64>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct TotalsRecord {
     pub mass: f64,
     pub momentum: Vec<f64>,
+    pub angular_momentum: f64,
     pub kinetic_energy: f64,
     pub internal_energy: f64,
+    pub potential_energy: f64,
     pub energy: f64,
 }
 
@@ -66,8 +140,10 @@ impl<const D: usize> From<&crate::particles::Totals<D>> for TotalsRecord {
         Self {
             mass: t.mass,
             momentum: t.momentum.to_vec(),
+            angular_momentum: t.angular_momentum,
             kinetic_energy: t.kinetic,
             internal_energy: t.internal,
+            potential_energy: t.potential,
             energy: t.energy(),
         }
     }

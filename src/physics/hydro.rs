@@ -6,7 +6,8 @@
 //! and `f = (1/r) dW/dr` (so that ∇_i W_ij = f·dx):
 //! 1. density, Eq. (5): ρ_i += m_j W_ij and ρ_j += m_i W_ij;
 //! 2. first derivatives, Eq. (10): [`gradient_pair`];
-//! 3. right-hand sides, Eq. (7) and the energy equation: [`force_pair`].
+//! 3. right-hand sides, Eq. (7), physical viscosity Eq. (8), and the energy equation:
+//!    [`force_pair`].
 
 use crate::physics::artificial_viscosity::ArtificialViscosity;
 
@@ -35,13 +36,15 @@ pub struct ForceSide<const D: usize> {
     pub cs: f64,
     /// Balsara factor (1 without the switch).
     pub balsara: f64,
+    /// Viscous stress S = ν σ (Eq. 9, plus bulk part); zero without physical viscosity.
+    pub stress: [[f64; D]; D],
 }
 
 /// One pair's contribution to the right-hand sides, independent of the partners' masses:
-/// a_i += m_j `accel`, a_j −= m_i `accel`; du_i += m_j (`work_i` + `heat_viscous`),
-/// du_j += m_i (`work_j` + `heat_viscous`). The pairwise antisymmetry makes Σ m a = 0
-/// (momentum conservation) and `work_i + work_j` is exactly the pair's pressure work, so
-/// d(E_kin + E_int)/dt = 0.
+/// a_i += m_j `accel`, a_j −= m_i `accel`; du_i += m_j (`work_i` + `heat_i`),
+/// du_j += m_i (`work_j` + `heat_j`). The pairwise antisymmetry makes Σ m a = 0 (momentum
+/// conservation), and the work and heat terms add up to minus the pair's change of kinetic
+/// energy, so d(E_kin + E_int)/dt = 0 exactly.
 #[derive(Clone, Copy, Debug)]
 pub struct PairForce<const D: usize> {
     pub accel: [f64; D],
@@ -49,8 +52,10 @@ pub struct PairForce<const D: usize> {
     pub work_i: f64,
     /// p_j/(ρ_i ρ_j) v_ij·∇_i W_ij.
     pub work_j: f64,
-    /// ½ Π_ij v_ij·∇_i W_ij: viscous heating, shared equally.
-    pub heat_viscous: f64,
+    /// Dissipation at i: ½ Π_ij v_ij·∇_i W_ij (artificial, shared equally) plus
+    /// −S_i : (v_ij ⊗ ∇_i W_ij) / ρ_j (physical, with i's own stress).
+    pub heat_i: f64,
+    pub heat_j: f64,
     pub vsig: f64,
 }
 
@@ -62,6 +67,12 @@ pub struct PairForce<const D: usize> {
 /// law for particle i; each partner's work uses its own pressure. (Splitting the pair's
 /// work equally, ½ (p_i + p_j)/(ρ_i ρ_j), also conserves energy but heats an expanding cold
 /// particle with its hot neighbour's pressure, which traps the energy of a point blast.)
+///
+/// With `viscous`, physical viscosity, Eq. (8):
+/// dv_i/dt += Σ_j m_j (S_j/ρ_i + S_i/ρ_j) · ∇_i W_ij with S = ν σ, σ from Eq. (9), and the
+/// viscous work of the pair given to each partner with its own stress:
+/// du_i/dt += −Σ_j m_j (S_i/ρ_j) : (v_ij ⊗ ∇_i W_ij) ≈ ν_i σ_i : V_i = ½ ν_i σ_i:σ_i ≥ 0,
+/// which conserves total energy exactly (Riffert et al. 1995).
 #[inline]
 pub fn force_pair<const D: usize>(
     dx: &[f64; D],
@@ -70,6 +81,7 @@ pub fn force_pair<const D: usize>(
     i: &ForceSide<D>,
     j: &ForceSide<D>,
     av: &ArtificialViscosity,
+    viscous: bool,
 ) -> PairForce<D> {
     let mut vdotr = 0.0;
     for d in 0..D {
@@ -85,13 +97,33 @@ pub fn force_pair<const D: usize>(
     );
     let coef = -(pterm + pi) * f;
     let gv = f * vdotr / (i.rho * j.rho);
-    PairForce {
+    let heat_av = 0.5 * pi * f * vdotr;
+    let mut out = PairForce {
         accel: std::array::from_fn(|d| coef * dx[d]),
         work_i: i.p * gv,
         work_j: j.p * gv,
-        heat_viscous: 0.5 * pi * f * vdotr,
+        heat_i: heat_av,
+        heat_j: heat_av,
         vsig,
+    };
+    if viscous {
+        let g: [f64; D] = std::array::from_fn(|d| f * dx[d]);
+        let (inv_i, inv_j) = (1.0 / i.rho, 1.0 / j.rho);
+        let (mut si_vg, mut sj_vg) = (0.0, 0.0);
+        for a in 0..D {
+            let va = i.v[a] - j.v[a];
+            let mut ta = 0.0;
+            for b in 0..D {
+                ta += (j.stress[a][b] * inv_i + i.stress[a][b] * inv_j) * g[b];
+                si_vg += i.stress[a][b] * va * g[b];
+                sj_vg += j.stress[a][b] * va * g[b];
+            }
+            out.accel[a] += ta;
+        }
+        out.heat_i -= si_vg * inv_j;
+        out.heat_j -= sj_vg * inv_i;
     }
+    out
 }
 
 #[cfg(test)]
@@ -99,13 +131,14 @@ mod tests {
     use super::*;
     use crate::kernel::Kernel;
 
-    fn side(v: [f64; 2], rho: f64, p: f64) -> ForceSide<2> {
+    fn side(v: [f64; 2], rho: f64, p: f64, stress: [[f64; 2]; 2]) -> ForceSide<2> {
         ForceSide {
             v,
             rho,
             p,
             cs: 1.0,
             balsara: 1.0,
+            stress,
         }
     }
 
@@ -116,17 +149,20 @@ mod tests {
         let dx = [xi[0] - xj[0], xi[1] - xj[1]];
         let r = (dx[0] * dx[0] + dx[1] * dx[1]).sqrt();
         let (mi, mj) = (1.3, 0.7);
-        let a = side([1.0, -0.5], 1.1, 2.0);
-        let b = side([-0.3, 0.4], 0.8, 1.5);
+        let a = side([1.0, -0.5], 1.1, 2.0, [[0.3, -0.2], [-0.2, -0.3]]);
+        let b = side([-0.3, 0.4], 0.8, 1.5, [[-0.1, 0.5], [0.5, 0.1]]);
         let av = ArtificialViscosity::for_shocks();
-        let pf = force_pair(&dx, r, k.f(r), &a, &b, &av);
-        assert!(pf.heat_viscous > 0.0, "approaching pair must heat");
-        // dE/dt = m_i v_i·a_i + m_j v_j·a_j + m_i du_i + m_j du_j = 0.
-        let mut de = 0.0;
-        for d in 0..2 {
-            de += mi * a.v[d] * (mj * pf.accel[d]) - mj * b.v[d] * (mi * pf.accel[d]);
+        for viscous in [false, true] {
+            let pf = force_pair(&dx, r, k.f(r), &a, &b, &av, viscous);
+            // dE/dt = m_i v_i·a_i + m_j v_j·a_j + m_i du_i + m_j du_j = 0.
+            let mut de = 0.0;
+            for d in 0..2 {
+                de += mi * a.v[d] * (mj * pf.accel[d]) - mj * b.v[d] * (mi * pf.accel[d]);
+            }
+            de += mi * mj * (pf.work_i + pf.heat_i) + mj * mi * (pf.work_j + pf.heat_j);
+            assert!(de.abs() < 1e-12, "viscous {viscous}: {de}");
         }
-        de += mi * mj * (pf.work_i + pf.heat_viscous) + mj * mi * (pf.work_j + pf.heat_viscous);
-        assert!(de.abs() < 1e-12, "{de}");
+        let pf = force_pair(&dx, r, k.f(r), &a, &b, &av, false);
+        assert!(pf.heat_i > 0.0, "approaching pair must heat");
     }
 }

@@ -57,6 +57,8 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         bx,
         h: smoothing_length(cfg, dx),
         pressure_equilibrium: Some(a.p0),
+        t_end: None,
+        output_times: Vec::new(),
     })
 }
 

@@ -19,5 +19,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         bx,
         h: cfg.particles.h.expect("validated: particles.h present"),
         pressure_equilibrium: None,
+        t_end: None,
+        output_times: Vec::new(),
     })
 }

@@ -4,6 +4,7 @@
 pub mod advection;
 pub mod file;
 pub mod lattice;
+pub mod ring;
 pub mod sedov;
 pub mod sod;
 
@@ -23,6 +24,10 @@ pub struct InitialState<const D: usize> {
     /// If set, the internal energies are reset after the first density sum so that the
     /// pressure is exactly this value everywhere (a quiet pressure equilibrium).
     pub pressure_equilibrium: Option<f64>,
+    /// End time set by the problem itself (used when `time.end` is absent).
+    pub t_end: Option<f64>,
+    /// Snapshot times the problem asks for, besides `output.interval`.
+    pub output_times: Vec<f64>,
 }
 
 /// The smoothing length: `particles.h`, or `particles.h_factor` × the problem's reference
@@ -58,6 +63,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         ProblemKind::Sod => sod::setup(cfg)?,
         ProblemKind::Advection => advection::setup(cfg)?,
         ProblemKind::Sedov => sedov::setup(cfg)?,
+        ProblemKind::Ring => ring::setup(cfg)?,
         ProblemKind::File => file::setup(cfg)?,
     };
     check_initial_state(&state)?;
@@ -116,6 +122,7 @@ pub fn errors<const D: usize>(
         ProblemKind::Sod => sod::errors(cfg, p, t),
         ProblemKind::Advection => advection::errors(cfg, p, bx, t),
         ProblemKind::Sedov => sedov::errors(cfg, p, h, t),
+        ProblemKind::Ring => ring::errors(cfg, p, t),
         ProblemKind::File => Ok(BTreeMap::new()),
     }
 }

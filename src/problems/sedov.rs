@@ -64,6 +64,8 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         bx,
         h,
         pressure_equilibrium: None,
+        t_end: None,
+        output_times: Vec::new(),
     })
 }
 

@@ -96,6 +96,8 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         bx,
         h: smoothing_length(cfg, sparse),
         pressure_equilibrium: None,
+        t_end: None,
+        output_times: Vec::new(),
     })
 }
 

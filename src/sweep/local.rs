@@ -59,6 +59,9 @@ pub struct Local<const D: usize> {
     pub cs: Vec<f64>,
     pub balsara: Vec<f64>,
     pub vgrad: Vec<[[f64; D]; D]>,
+    /// Kinematic viscosity and viscous stress S = ν σ (Eq. 9), set after the gradient sum.
+    pub nu: Vec<f64>,
+    pub stress: Vec<[[f64; D]; D]>,
 }
 
 impl<const D: usize> Local<D> {
@@ -129,6 +132,8 @@ impl<const D: usize> Local<D> {
             cs: vec![0.0; total],
             balsara: vec![1.0; total],
             vgrad: vec![[[0.0; D]; D]; total],
+            nu: vec![0.0; total],
+            stress: vec![[[0.0; D]; D]; total],
         }
     }
 

@@ -20,7 +20,9 @@ use crate::boundary::SimBox;
 use crate::kernel::Kernel;
 use crate::particles::Particles;
 use crate::physics::artificial_viscosity::{ArtificialViscosity, balsara_factor};
-use crate::physics::eos::Eos;
+use crate::physics::eos::{Eos, cylindrical_radius};
+use crate::physics::gravity::PointMass;
+use crate::physics::viscosity::ViscosityModel;
 use local::{Local, Work};
 use pairs::{BYTES_PER_PAIR, PairBlock};
 
@@ -30,6 +32,23 @@ pub struct Physics<const D: usize> {
     pub kernel: Kernel<D>,
     pub eos: Eos,
     pub av: ArtificialViscosity,
+    /// Physical shear viscosity, Eqs. (8)–(10).
+    pub viscosity: ViscosityModel,
+    /// External central point mass (applied outside the sweep; ν = α c_s H needs its GM).
+    pub gravity: Option<PointMass>,
+}
+
+impl<const D: usize> Physics<D> {
+    /// Hydrodynamics only: no physical viscosity, no gravity.
+    pub fn hydro(kernel: Kernel<D>, eos: Eos, av: ArtificialViscosity) -> Self {
+        Self {
+            kernel,
+            eos,
+            av,
+            viscosity: ViscosityModel::default(),
+            gravity: None,
+        }
+    }
 }
 
 /// Figures of one evaluation.
@@ -209,7 +228,7 @@ pub fn evaluate<const D: usize>(
                     block.gradient(&local, &mut work);
                     lap(&mut times.gradient, c);
                 } else {
-                    block.force(&local, &phys.av, &mut work);
+                    block.force(&local, phys, &mut work);
                     lap(&mut times.force, c);
                     if window == Window::Sweep {
                         live_pairs -= block.len();
@@ -285,7 +304,8 @@ fn finish_slab<const D: usize>(
         match stage {
             DENSITY => {
                 let rho = work[k].rho + local.mass[k] * phys.kernel.w0();
-                let (p, cs) = phys.eos.pressure_sound_speed(rho, local.u[k]);
+                let radius = cylindrical_radius(&local.position(k));
+                let (p, cs) = phys.eos.pressure_sound_speed(rho, local.u[k], radius);
                 local.rho[k] = rho;
                 local.p[k] = p;
                 local.cs[k] = cs;
@@ -294,6 +314,14 @@ fn finish_slab<const D: usize>(
                 local.vgrad[k] = work[k].grad;
                 if phys.av.balsara {
                     local.balsara[k] = balsara_factor(&local.vgrad[k], local.cs[k], h);
+                }
+                if phys.viscosity.is_on() {
+                    let gm = phys.gravity.map_or(0.0, |g| g.gm);
+                    let nu =
+                        phys.viscosity
+                            .nu(local.cs[k], cylindrical_radius(&local.position(k)), gm);
+                    local.nu[k] = nu;
+                    local.stress[k] = phys.viscosity.stress(&local.vgrad[k], nu);
                 }
             }
             _ => {}
@@ -310,9 +338,12 @@ fn finish_slab<const D: usize>(
             }
             GRADIENT => {
                 let s = local.sign[g];
-                local.vgrad[g] = std::array::from_fn(|a| {
-                    std::array::from_fn(|b| s[a] * s[b] * local.vgrad[o][a][b])
-                });
+                let flip = |m: &[[f64; D]; D]| -> [[f64; D]; D] {
+                    std::array::from_fn(|a| std::array::from_fn(|b| s[a] * s[b] * m[a][b]))
+                };
+                local.vgrad[g] = flip(&local.vgrad[o]);
+                local.stress[g] = flip(&local.stress[o]);
+                local.nu[g] = local.nu[o];
                 local.balsara[g] = local.balsara[o];
             }
             _ => {}
@@ -339,6 +370,7 @@ fn write_back<const D: usize>(parts: &mut Particles<D>, local: &Local<D>, work: 
         parts.du[i] = w.du;
         parts.diss[i] = w.diss;
         parts.vsig[i] = w.vsig.max(2.0 * local.cs[k]);
+        parts.nu[i] = local.nu[k];
         parts.interactions[i] = w.interactions;
     }
 }

@@ -6,8 +6,8 @@
 use rayon::prelude::*;
 
 use crate::kernel::Kernel;
-use crate::physics::artificial_viscosity::ArtificialViscosity;
 use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
+use crate::sweep::Physics;
 use crate::sweep::local::{Local, Work};
 
 /// An interacting pair with its kernel values, computed once and reused by all three sums.
@@ -295,38 +295,35 @@ impl PairBlock {
     }
 
     /// Third sum: accelerations (Eq. 7 + viscosity) and du/dt.
-    pub fn force<const D: usize>(
-        &self,
-        local: &Local<D>,
-        av: &ArtificialViscosity,
-        work: &mut [Work<D>],
-    ) {
+    pub fn force<const D: usize>(&self, local: &Local<D>, phys: &Physics<D>, work: &mut [Work<D>]) {
         let side = |k: usize| ForceSide {
             v: local.velocity(k),
             rho: local.rho[k],
             p: local.p[k],
             cs: local.cs[k],
             balsara: local.balsara[k],
+            stress: local.stress[k],
         };
+        let (av, viscous) = (&phys.av, phys.viscosity.is_on());
         let m = &local.mass;
         self.scatter(
             work,
             |p| {
                 let (i, j) = (p.i as usize, p.j as usize);
                 let dx: [f64; D] = std::array::from_fn(|d| local.pos[d][i] - local.pos[d][j]);
-                let pf = force_pair(&dx, p.r, p.f, &side(i), &side(j), av);
+                let pf = force_pair(&dx, p.r, p.f, &side(i), &side(j), av, viscous);
                 let (mi, mj) = (m[i], m[j]);
                 (
                     ForceSum {
                         acc: std::array::from_fn(|d| mj * pf.accel[d]),
-                        du: mj * (pf.work_i + pf.heat_viscous),
-                        diss: mj * pf.heat_viscous,
+                        du: mj * (pf.work_i + pf.heat_i),
+                        diss: mj * pf.heat_i,
                         vsig: pf.vsig,
                     },
                     ForceSum {
                         acc: std::array::from_fn(|d| -mi * pf.accel[d]),
-                        du: mi * (pf.work_j + pf.heat_viscous),
-                        diss: mi * pf.heat_viscous,
+                        du: mi * (pf.work_j + pf.heat_j),
+                        diss: mi * pf.heat_j,
                         vsig: pf.vsig,
                     },
                 )

@@ -5,6 +5,7 @@
 use crate::boundary::{BoundaryKind, SimBox};
 use crate::particles::Particles;
 use crate::physics::artificial_viscosity::balsara_factor;
+use crate::physics::eos::cylindrical_radius;
 use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
 use crate::sweep::Physics;
 use crate::sweep::local::Local;
@@ -77,7 +78,10 @@ pub fn full_list_minimum_image<const D: usize>(
     }
     let mut balsara = vec![1.0; n];
     for i in 0..n {
-        let (p, cs) = phys.eos.pressure_sound_speed(parts.rho[i], parts.u[i]);
+        let radius = cylindrical_radius(&parts.position(i));
+        let (p, cs) = phys
+            .eos
+            .pressure_sound_speed(parts.rho[i], parts.u[i], radius);
         parts.p[i] = p;
         parts.cs[i] = cs;
         for a in 0..D {
@@ -111,12 +115,24 @@ pub fn full_list_minimum_image<const D: usize>(
             *b = balsara_factor(&v, parts.cs[i], phys.kernel.h());
         }
     }
+    let gm = phys.gravity.map_or(0.0, |g| g.gm);
+    let stress: Vec<[[f64; D]; D]> = (0..n)
+        .map(|k| {
+            let v: [[f64; D]; D] =
+                std::array::from_fn(|a| std::array::from_fn(|c| parts.vgrad[a][c][k]));
+            let nu = phys
+                .viscosity
+                .nu(parts.cs[k], cylindrical_radius(&parts.position(k)), gm);
+            phys.viscosity.stress(&v, nu)
+        })
+        .collect();
     let side = |parts: &Particles<D>, k: usize| ForceSide {
         v: parts.velocity(k),
         rho: parts.rho[k],
         p: parts.p[k],
         cs: parts.cs[k],
         balsara: balsara[k],
+        stress: stress[k],
     };
     for &(i, j, dx, r) in &list {
         let pf = force_pair(
@@ -126,15 +142,16 @@ pub fn full_list_minimum_image<const D: usize>(
             &side(parts, i),
             &side(parts, j),
             &phys.av,
+            phys.viscosity.is_on(),
         );
         let (mi, mj) = (parts.mass[i], parts.mass[j]);
         for d in 0..D {
             parts.acc[d][i] += mj * pf.accel[d];
             parts.acc[d][j] -= mi * pf.accel[d];
         }
-        parts.du[i] += mj * (pf.work_i + pf.heat_viscous);
-        parts.du[j] += mi * (pf.work_j + pf.heat_viscous);
-        parts.diss[i] += mj * pf.heat_viscous;
-        parts.diss[j] += mi * pf.heat_viscous;
+        parts.du[i] += mj * (pf.work_i + pf.heat_i);
+        parts.du[j] += mi * (pf.work_j + pf.heat_j);
+        parts.diss[i] += mj * pf.heat_i;
+        parts.diss[j] += mi * pf.heat_j;
     }
 }
