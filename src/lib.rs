@@ -14,6 +14,7 @@ pub mod kernel;
 pub mod particles;
 pub mod physics;
 pub mod problems;
+pub mod render;
 pub mod rng;
 pub mod simulation;
 pub mod sweep;

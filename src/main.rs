@@ -46,6 +46,11 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
     },
+    /// Analyse a finished run against its exact solution (`analyse ring runs/ring`).
+    Analyse {
+        #[command(subcommand)]
+        what: AnalyseCommand,
+    },
     /// Throughput of the sweep on a 3D periodic box.
     Bench {
         /// Particle numbers (repeatable).
@@ -65,6 +70,16 @@ enum Command {
         /// Print JSON lines instead of a table.
         #[arg(long)]
         json: bool,
+    },
+}
+
+#[derive(Subcommand)]
+enum AnalyseCommand {
+    /// The spreading ring: averaged Σ(R) against the exact solution at each snapshot
+    /// (ring_profiles.csv, ring_errors.csv, ring.png in the run folder).
+    Ring {
+        /// The run's output folder.
+        run: PathBuf,
     },
 }
 
@@ -122,6 +137,18 @@ fn real_main(cli: Cli) -> Result<()> {
                     eprintln!("  {k} = {v:.6e}");
                 }
                 eprintln!("  outputs in {}", out.display());
+            }
+            Ok(())
+        }
+        Command::Analyse {
+            what: AnalyseCommand::Ring { run },
+        } => {
+            let report = sphdisk::analysis::ring_report::analyse_ring(&run)?;
+            for (tau, l1) in &report.l1 {
+                println!("tau = {tau:.4}: L1 of the averaged Σ = {:.2}%", 100.0 * l1);
+            }
+            for f in &report.files {
+                println!("wrote {}", f.display());
             }
             Ok(())
         }

@@ -202,3 +202,43 @@ fn a_failed_run_leaves_earlier_outputs_intact() {
         "{\"kept\": true}"
     );
 }
+
+#[test]
+fn bad_viscosity_and_disk_settings_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    let p = problem("ring.toml");
+    assert_fails(
+        d.path(),
+        &["check", &p, "--set", "viscosity.nu=-1e-3"],
+        &["viscosity.nu"],
+    );
+    assert_fails(
+        d.path(),
+        &["check", &p, "--set", "viscosity.alpha=-0.1"],
+        &["viscosity"],
+    );
+    assert_fails(
+        d.path(),
+        &["check", &p, "--set", "gravity.accretion_radius=1.5"],
+        &["gravity.accretion_radius", "ring"],
+    );
+    assert_fails(
+        d.path(),
+        &[
+            "check",
+            &p,
+            "--set",
+            "boundary.x=periodic",
+            "--set",
+            "domain.min=[-1.0, -1.0]",
+            "--set",
+            "domain.max=[1.0, 1.0]",
+        ],
+        &["does not fit"],
+    );
+    assert_fails(
+        d.path(),
+        &["check", &p, "--set", "gravity.gm=-1"],
+        &["gravity.gm"],
+    );
+}

@@ -4,6 +4,7 @@
 pub mod advection;
 pub mod riemann;
 pub mod ring;
+pub mod ring_report;
 pub mod sedov;
 
 use crate::particles::Particles;
@@ -70,7 +71,7 @@ fn binned(
 /// Statistics of the particles' density in one annulus about the origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Annulus {
-    /// Bin centre.
+    /// Mean radius of the particles in the annulus (the bin centre if it is empty).
     pub r: f64,
     pub count: usize,
     pub mean: f64,
@@ -93,14 +94,18 @@ pub fn annulus_stats<const D: usize>(p: &Particles<D>, bin: f64) -> Vec<Annulus>
     let rmax = (0..p.len()).map(radius).fold(0.0, f64::max);
     let nb = (rmax / bin).floor() as usize + 1;
     let mut vals: Vec<Vec<f64>> = vec![Vec::new(); nb];
+    let mut rsum = vec![0.0; nb];
     for i in 0..p.len() {
-        vals[((radius(i) / bin) as usize).min(nb - 1)].push(p.rho[i]);
+        let r = radius(i);
+        let b = ((r / bin) as usize).min(nb - 1);
+        vals[b].push(p.rho[i]);
+        rsum[b] += r;
     }
     vals.into_iter()
         .enumerate()
         .map(|(b, mut v)| {
-            let r = (b as f64 + 0.5) * bin;
             if v.is_empty() {
+                let r = (b as f64 + 0.5) * bin;
                 return Annulus {
                     r,
                     count: 0,
@@ -114,7 +119,7 @@ pub fn annulus_stats<const D: usize>(p: &Particles<D>, bin: f64) -> Vec<Annulus>
             v.sort_by(f64::total_cmp);
             let q = |f: f64| v[((v.len() - 1) as f64 * f).round() as usize];
             Annulus {
-                r,
+                r: rsum[b] / v.len() as f64,
                 count: v.len(),
                 mean: v.iter().sum::<f64>() / v.len() as f64,
                 min: v[0],

@@ -54,6 +54,8 @@ pub fn read_particles<const D: usize>(path: &Path) -> Result<Particles<D>> {
     let cv: Vec<usize> = (0..D).map(|d| col(vaxes[d])).collect::<Result<_>>()?;
     let cm = col("m")?;
     let cu = col("u")?;
+    // Written by sphdisk: the density at output time, useful to analyses.
+    let crho = cols.iter().position(|c| *c == "rho");
     let mut p = Particles::new();
     for (ln, line) in lines {
         if line.trim().is_empty() {
@@ -95,6 +97,9 @@ pub fn read_particles<const D: usize>(path: &Path) -> Result<Particles<D>> {
             vel[d] = num(cv[d])?;
         }
         p.push(id, pos, vel, num(cm)?, num(cu)?);
+        if let Some(c) = crho {
+            *p.rho.last_mut().expect("just pushed") = num(c)?;
+        }
     }
     Ok(p)
 }
