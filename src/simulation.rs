@@ -155,13 +155,12 @@ pub fn run_with_state<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result
         prev = now;
         if let Some(g) = gravity
             && let Some(r_acc) = g.accretion_radius
+            && accreted.accrete(&mut p, r_acc, g) > 0
         {
-            if accreted.accrete(&mut p, r_acc, g) > 0 {
-                if p.is_empty() {
-                    bail!("every particle was accreted by t = {t:.6}");
-                }
-                prev = p.totals(gravity);
+            if p.is_empty() {
+                bail!("every particle was accreted by t = {t:.6}");
             }
+            prev = p.totals(gravity);
         }
         if let Some(i) = p.u.iter().position(|u| !u.is_finite() || *u < 0.0) {
             bail!(
