@@ -41,6 +41,7 @@ pub struct Config {
     pub advection: Option<AdvectionParams>,
     pub sedov: Option<SedovParams>,
     pub ring: Option<RingParams>,
+    pub disk: Option<DiskParams>,
     pub initial: Option<InitialFileParams>,
 }
 
@@ -55,6 +56,8 @@ pub enum ProblemKind {
     Sedov,
     /// Viscously spreading ring around a point mass (Lüst 1952, Pringle 1981).
     Ring,
+    /// Keplerian disk (2D or 3D) around a point mass, locally isothermal, in equilibrium.
+    Disk,
     /// Particles read from a CSV file (`[initial] file`).
     File,
 }
@@ -66,6 +69,7 @@ impl ProblemKind {
             ProblemKind::Advection => "advection",
             ProblemKind::Sedov => "sedov",
             ProblemKind::Ring => "ring",
+            ProblemKind::Disk => "disk",
             ProblemKind::File => "file",
         }
     }
@@ -313,6 +317,39 @@ impl Default for RingParams {
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DiskParams {
+    /// Disk mass (the disk does not self-gravitate; this sets the density scale).
+    pub mass: f64,
+    /// Inner edge: Σ ∝ R^(−p) (1 − √(r_in/R)) (zero-torque taper).
+    pub r_in: f64,
+    /// Outer scale: Σ is further multiplied by exp(−(R/r_out)⁴).
+    pub r_out: f64,
+    /// Power-law index of Σ.
+    pub p: f64,
+    /// Particles are placed where Σ exceeds this fraction of its peak.
+    pub cutoff: f64,
+    /// Vertical extent of the particle layers in scale heights H = c_s/Ω (3D).
+    pub layers_h: f64,
+    /// Run length in orbits at r_in (used when `time.end` is absent).
+    pub orbits: f64,
+}
+
+impl Default for DiskParams {
+    fn default() -> Self {
+        Self {
+            mass: 0.01,
+            r_in: 1.0,
+            r_out: 1.6,
+            p: 1.0,
+            cutoff: 0.02,
+            layers_h: 2.5,
+            orbits: 10.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialFileParams {
     /// CSV with the `final.csv` header (`id,x,y,z,vx,vy,vz,m,h,rho,u,p`); relative paths are
@@ -453,7 +490,7 @@ impl Config {
             .map_err(|e| anyhow::anyhow!("key `{}`", e.replacen(" must", "`: must", 1)))?;
         match self.time.end {
             Some(end) => positive("time.end", end)?,
-            None if self.problem.kind == ProblemKind::Ring => {}
+            None if matches!(self.problem.kind, ProblemKind::Ring | ProblemKind::Disk) => {}
             None => bail!("key `time.end`: missing"),
         }
         if let Some(g) = &self.gravity {
@@ -505,6 +542,7 @@ impl Config {
             ),
             ("sedov", self.sedov.is_some(), ProblemKind::Sedov),
             ("ring", self.ring.is_some(), ProblemKind::Ring),
+            ("disk", self.disk.is_some(), ProblemKind::Disk),
             ("initial", self.initial.is_some(), ProblemKind::File),
         ] {
             if present && kind != owner {

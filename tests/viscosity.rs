@@ -60,7 +60,7 @@ fn shear_wave_decays_at_nu_k_squared() {
         p.push(id, x, [0.0, 0.01 * (k * x[0]).sin()], dx * dx, 0.0);
     }
     let bx = periodic_box::<2>();
-    let mut phys = Physics::hydro(Kernel::new(h), Eos::Cold, ArtificialViscosity::default());
+    let mut phys = Physics::hydro(Kernel::new(h), Eos::Cold {}, ArtificialViscosity::default());
     phys.viscosity = viscous(nu);
     rhs(&mut p, &bx, &phys, Window::Sweep);
     let ctl = StepControl::default();

@@ -16,7 +16,7 @@ pub enum Eos {
     /// distance from the origin (where the central mass sits).
     LocallyIsothermal { cs0: f64, r0: f64, q: f64 },
     /// Pressure-less gas: p = 0, c = 0.
-    Cold,
+    Cold {},
 }
 
 impl Eos {
@@ -34,7 +34,7 @@ impl Eos {
                 let cs = cs0 * (radius.max(1e-12 * r0) / r0).powf(-q);
                 (cs * cs * rho, cs)
             }
-            Eos::Cold => (0.0, 0.0),
+            Eos::Cold {} => (0.0, 0.0),
         }
     }
 
@@ -45,7 +45,7 @@ impl Eos {
             Eos::Ideal { gamma } => p / ((gamma - 1.0) * rho),
             Eos::Isothermal { cs } => cs * cs,
             Eos::LocallyIsothermal { cs0, .. } => cs0 * cs0,
-            Eos::Cold => 0.0,
+            Eos::Cold {} => 0.0,
         }
     }
 
@@ -114,7 +114,18 @@ mod tests {
         let (p, c) = eos.pressure_sound_speed(2.0, 0.0, 4.0);
         assert!((c - 0.025).abs() < 1e-15);
         assert!((p - 2.0 * 0.025 * 0.025).abs() < 1e-15);
-        assert_eq!(Eos::Cold.pressure_sound_speed(1.0, 1.0, 1.0), (0.0, 0.0));
+        assert_eq!(Eos::Cold {}.pressure_sound_speed(1.0, 1.0, 1.0), (0.0, 0.0));
         assert_eq!(cylindrical_radius(&[3.0, 4.0, 12.0]), 5.0);
+    }
+
+    #[test]
+    fn a_key_of_another_kind_is_refused() {
+        let t: toml::Table = "kind = \"cold\"\ncs = 0.05".parse().unwrap();
+        assert!(toml::Value::Table(t).try_into::<Eos>().is_err());
+        let t: toml::Table = "kind = \"cold\"".parse().unwrap();
+        assert_eq!(
+            toml::Value::Table(t).try_into::<Eos>().unwrap(),
+            Eos::Cold {}
+        );
     }
 }

@@ -2,6 +2,7 @@
 //! problem file, and measures its error against its exact solution at the end.
 
 pub mod advection;
+pub mod disk;
 pub mod file;
 pub mod lattice;
 pub mod ring;
@@ -64,6 +65,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         ProblemKind::Advection => advection::setup(cfg)?,
         ProblemKind::Sedov => sedov::setup(cfg)?,
         ProblemKind::Ring => ring::setup(cfg)?,
+        ProblemKind::Disk => disk::setup(cfg)?,
         ProblemKind::File => file::setup(cfg)?,
     };
     check_initial_state(&state)?;
@@ -123,6 +125,7 @@ pub fn errors<const D: usize>(
         ProblemKind::Advection => advection::errors(cfg, p, bx, t),
         ProblemKind::Sedov => sedov::errors(cfg, p, h, t),
         ProblemKind::Ring => ring::errors(cfg, p, t),
+        ProblemKind::Disk => disk::errors(cfg, p),
         ProblemKind::File => Ok(BTreeMap::new()),
     }
 }

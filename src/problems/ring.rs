@@ -155,7 +155,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     }
     if !matches!(
         cfg.eos,
-        Eos::Isothermal { .. } | Eos::LocallyIsothermal { .. } | Eos::Cold
+        Eos::Isothermal { .. } | Eos::LocallyIsothermal { .. } | Eos::Cold {}
     ) {
         bail!("key `eos.kind`: the ring uses an isothermal, locally_isothermal or cold gas");
     }
