@@ -72,6 +72,20 @@ impl<const D: usize> Particles<D> {
         self.mass.len()
     }
 
+    /// The per-particle scalars an evaluation recomputes (ρ, p, c_s, du/dt, dissipation,
+    /// v_sig, ν), for operations that treat them all alike.
+    fn derived_scalars_mut(&mut self) -> [&mut Vec<f64>; 7] {
+        [
+            &mut self.rho,
+            &mut self.p,
+            &mut self.cs,
+            &mut self.du,
+            &mut self.diss,
+            &mut self.vsig,
+            &mut self.nu,
+        ]
+    }
+
     pub fn is_empty(&self) -> bool {
         self.mass.is_empty()
     }
@@ -89,15 +103,7 @@ impl<const D: usize> Particles<D> {
         }
         self.mass.push(mass);
         self.u.push(u);
-        for v in [
-            &mut self.rho,
-            &mut self.p,
-            &mut self.cs,
-            &mut self.du,
-            &mut self.diss,
-            &mut self.vsig,
-            &mut self.nu,
-        ] {
+        for v in self.derived_scalars_mut() {
             v.push(0.0);
         }
         self.interactions.push(0);
@@ -171,17 +177,9 @@ impl<const D: usize> Particles<D> {
                 filter(&mut self.vgrad[d][b], keep);
             }
         }
-        for v in [
-            &mut self.mass,
-            &mut self.u,
-            &mut self.rho,
-            &mut self.p,
-            &mut self.cs,
-            &mut self.du,
-            &mut self.diss,
-            &mut self.vsig,
-            &mut self.nu,
-        ] {
+        filter(&mut self.mass, keep);
+        filter(&mut self.u, keep);
+        for v in self.derived_scalars_mut() {
             filter(v, keep);
         }
         filter(&mut self.interactions, keep);

@@ -53,12 +53,8 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     }
     let bx = make_box(cfg, [0.0; D], [a.length; D], [BoundaryKind::Periodic; D]);
     Ok(InitialState {
-        particles: p,
-        bx,
-        h: smoothing_length(cfg, dx),
         pressure_equilibrium: Some(a.p0),
-        t_end: None,
-        output_times: Vec::new(),
+        ..InitialState::new(p, bx, smoothing_length(cfg, dx))
     })
 }
 

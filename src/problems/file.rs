@@ -14,12 +14,6 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let init = cfg.initial.as_ref().expect("validated: [initial] present");
     let particles = read_particles::<D>(Path::new(&init.file))?;
     let bx = make_box(cfg, [0.0; D], [1.0; D], [BoundaryKind::Open; D]);
-    Ok(InitialState {
-        particles,
-        bx,
-        h: cfg.particles.h.expect("validated: particles.h present"),
-        pressure_equilibrium: None,
-        t_end: None,
-        output_times: Vec::new(),
-    })
+    let h = cfg.particles.h.expect("validated: particles.h present");
+    Ok(InitialState::new(particles, bx, h))
 }

@@ -31,6 +31,20 @@ pub struct InitialState<const D: usize> {
     pub output_times: Vec<f64>,
 }
 
+impl<const D: usize> InitialState<D> {
+    /// A state with no pressure reset and no end or snapshot times of its own.
+    pub fn new(particles: Particles<D>, bx: SimBox<D>, h: f64) -> Self {
+        Self {
+            particles,
+            bx,
+            h,
+            pressure_equilibrium: None,
+            t_end: None,
+            output_times: Vec::new(),
+        }
+    }
+}
+
 /// The smoothing length: `particles.h`, or `particles.h_factor` × the problem's reference
 /// particle spacing.
 pub fn smoothing_length(cfg: &Config, reference_spacing: f64) -> f64 {

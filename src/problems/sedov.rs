@@ -59,14 +59,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         [0.5 * s.length; D],
         [BoundaryKind::Periodic; D],
     );
-    Ok(InitialState {
-        particles: p,
-        bx,
-        h,
-        pressure_equilibrium: None,
-        t_end: None,
-        output_times: Vec::new(),
-    })
+    Ok(InitialState::new(p, bx, h))
 }
 
 /// Shock radius: in the shell-averaged density profile (shells of width h/2), where the

@@ -91,14 +91,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     kinds[0] = BoundaryKind::Reflecting;
     let bx = make_box(cfg, [0.0; D], max, kinds);
     let sparse = if l.rho < r.rho { dx } else { dx_r };
-    Ok(InitialState {
-        particles: p,
-        bx,
-        h: smoothing_length(cfg, sparse),
-        pressure_equilibrium: None,
-        t_end: None,
-        output_times: Vec::new(),
-    })
+    Ok(InitialState::new(p, bx, smoothing_length(cfg, sparse)))
 }
 
 /// L1 norms (volume-weighted) of ρ, v_x and p against the exact solution; for a
