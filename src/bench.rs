@@ -82,15 +82,7 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
         peak = peak.max(s.peak_pairs);
         times.add(&s.times);
     }
-    let k = 1.0 / steps as f64;
-    let times_per_step = crate::sweep::StageTimes {
-        build: times.build * k,
-        find_pairs: times.find_pairs * k,
-        density: times.density * k,
-        gradient: times.gradient * k,
-        force: times.force * k,
-        finish: times.finish * k,
-    };
+    let times_per_step = times.scaled(1.0 / steps as f64);
     let secs = start.elapsed().as_secs_f64();
     let threads = rayon::current_num_threads();
     let per_step_pairs = pairs as f64 / steps as f64;

@@ -195,11 +195,8 @@ pub fn ring_l1<const D: usize>(rec: &RingRecord, p: &Particles<D>, t: f64) -> f6
         .into_iter()
         .filter(|b| b.count > 0)
         .map(|b| {
-            (
-                b.r,
-                (b.mean - sol.sigma(b.r, tau)).abs(),
-                sol.sigma(b.r, tau),
-            )
+            let ex = sol.sigma(b.r, tau);
+            (b.r, (b.mean - ex).abs(), ex)
         })
         .collect();
     let (mut num, mut den) = (0.0, 0.0);

@@ -88,6 +88,18 @@ impl StageTimes {
         self.force += o.force;
         self.finish += o.finish;
     }
+
+    /// Every part multiplied by `k` (e.g. totals to per-step means).
+    pub fn scaled(&self, k: f64) -> StageTimes {
+        StageTimes {
+            build: self.build * k,
+            find_pairs: self.find_pairs * k,
+            density: self.density * k,
+            gradient: self.gradient * k,
+            force: self.force * k,
+            finish: self.finish * k,
+        }
+    }
 }
 
 /// How long the window keeps pairs: `Sweep` drops a slab's pairs once its force sum is done
