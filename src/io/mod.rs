@@ -3,4 +3,5 @@
 
 pub mod atomic;
 pub mod csv;
+pub mod snapshot;
 pub mod summary;
