@@ -43,6 +43,8 @@ pub struct Config {
     pub ring: Option<RingParams>,
     pub disk: Option<DiskParams>,
     pub initial: Option<InitialFileParams>,
+    /// The code units in cgs (`mass_cgs`, `length_cgs`, `time_cgs`), for snapshot metadata.
+    pub units: Option<crate::io::hdf5::Units>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -162,8 +164,15 @@ fn default_max_steps() -> u64 {
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSection {
-    /// Time between snapshots (CSV, `snap_NNNN.csv`); none if absent or 0.
+    /// Time between snapshots (HDF5, `snap_NNNN.hdf5`); none if absent or 0.
     pub interval: Option<f64>,
+    /// Files each snapshot is split into (SWIFT's multi-file convention); default 1.
+    pub files_per_snapshot: Option<usize>,
+    /// Write a checkpoint every this many steps (besides one at each snapshot and one
+    /// every `checkpoint_wall_seconds`).
+    pub checkpoint_steps: Option<u64>,
+    /// Wall-clock seconds between checkpoints; default 600. The last two are kept.
+    pub checkpoint_wall_seconds: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -463,6 +472,18 @@ impl Config {
         };
         if let Some(h) = self.particles.h {
             positive("particles.h", h)?;
+        }
+        if let Some(u) = &self.units {
+            u.validate().map_err(anyhow::Error::msg)?;
+        }
+        if self.output.files_per_snapshot == Some(0) {
+            bail!("key `output.files_per_snapshot`: must be ≥ 1, got 0");
+        }
+        if self.output.checkpoint_steps == Some(0) {
+            bail!("key `output.checkpoint_steps`: must be ≥ 1, got 0");
+        }
+        if let Some(w) = self.output.checkpoint_wall_seconds {
+            positive("output.checkpoint_wall_seconds", w)?;
         }
         if let Some(f) = self.particles.h_factor {
             positive("particles.h_factor", f)?;

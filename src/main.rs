@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 
 use sphdisk::config::Config;
-use sphdisk::simulation::{RunOptions, default_out_dir, run};
+use sphdisk::simulation::{Ended, RunOptions, default_out_dir, run};
 use sphdisk::sweep::Window;
 
 #[derive(Parser)]
@@ -26,17 +26,29 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a problem file and write final.csv, snapshots and summary.json.
+    /// Run a problem file and write snapshots (HDF5), checkpoints, final.csv, run.log and
+    /// summary.json; or continue a run from its checkpoint with --resume.
     Run {
-        /// Problem file (TOML), e.g. problems/sod.toml.
-        problem: PathBuf,
+        /// Problem file (TOML), e.g. problems/sod.toml (not with --resume).
+        #[arg(required_unless_present = "resume", conflicts_with = "resume")]
+        problem: Option<PathBuf>,
         /// Output folder (default: runs/<problem name>).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "resume")]
         out: Option<PathBuf>,
         /// Override a key of the problem file, e.g. --set particles.n=800 (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
-        /// No progress bar.
+        /// Start from the particles of this snapshot (HDF5, SWIFT or GADGET names) instead
+        /// of the problem's own set-up.
+        #[arg(long, value_name = "SNAPSHOT")]
+        from: Option<PathBuf>,
+        /// Continue the run in this folder from its newest checkpoint (bit for bit).
+        #[arg(long, value_name = "RUN_FOLDER")]
+        resume: Option<PathBuf>,
+        /// Stop after this many steps (counted from the run's start) with a checkpoint.
+        #[arg(long, value_name = "STEPS")]
+        stop_after: Option<u64>,
+        /// No progress bar and no report on the terminal (run.log has it all).
         #[arg(long)]
         quiet: bool,
     },
@@ -100,6 +112,40 @@ fn main() -> ExitCode {
     }
 }
 
+/// The terminal report of a run.
+fn report_run(ended: &Ended, out: &std::path::Path) {
+    match ended {
+        Ended::Finished(s) => {
+            eprintln!(
+                "{}: {} particles, {}D, {} steps to t = {} in {:.2} s ({:.3e} particle updates/s, {} threads)",
+                s.problem,
+                s.particles,
+                s.dimension,
+                s.steps,
+                s.t_end,
+                s.wall_seconds,
+                s.particle_updates_per_second,
+                s.threads
+            );
+            for (k, v) in &s.errors {
+                eprintln!("  {k} = {v:.6e}");
+            }
+        }
+        Ended::Stopped {
+            step,
+            time,
+            checkpoint,
+        } => {
+            eprintln!(
+                "stopped after step {step} at t = {time}; checkpoint {}",
+                checkpoint.display()
+            );
+            eprintln!("  continue with: sphdisk run --resume {}", out.display());
+        }
+    }
+    eprintln!("  outputs in {}", out.display());
+}
+
 fn real_main(cli: Cli) -> Result<()> {
     if let Some(t) = cli.threads {
         rayon::ThreadPoolBuilder::new()
@@ -112,31 +158,36 @@ fn real_main(cli: Cli) -> Result<()> {
             problem,
             out,
             sets,
+            from,
+            resume,
+            stop_after,
             quiet,
         } => {
-            let cfg = Config::load(&problem, &sets)?;
-            let out = out.unwrap_or_else(|| default_out_dir(&problem));
-            let opts = RunOptions {
-                out: out.clone(),
-                progress: !quiet,
-            };
-            let s = run(&cfg, &opts)?;
-            if !quiet {
-                eprintln!(
-                    "{}: {} particles, {}D, {} steps to t = {} in {:.2} s ({:.3e} particle updates/s, {} threads)",
-                    s.problem,
-                    s.particles,
-                    s.dimension,
-                    s.steps,
-                    s.t_end,
-                    s.wall_seconds,
-                    s.particle_updates_per_second,
-                    s.threads
-                );
-                for (k, v) in &s.errors {
-                    eprintln!("  {k} = {v:.6e}");
+            let (ended, out) = match (resume, problem) {
+                (Some(dir), _) => {
+                    let opts = RunOptions {
+                        out: dir.clone(),
+                        progress: !quiet,
+                        from: None,
+                        stop_after,
+                    };
+                    (sphdisk::simulation::resume(&sets, &opts)?, dir)
                 }
-                eprintln!("  outputs in {}", out.display());
+                (None, Some(problem)) => {
+                    let cfg = Config::load(&problem, &sets)?;
+                    let out = out.unwrap_or_else(|| default_out_dir(&problem));
+                    let opts = RunOptions {
+                        out: out.clone(),
+                        progress: !quiet,
+                        from,
+                        stop_after,
+                    };
+                    (run(&cfg, &opts)?, out)
+                }
+                (None, None) => anyhow::bail!("give a problem file or --resume RUN_FOLDER"),
+            };
+            if !quiet {
+                report_run(&ended, &out);
             }
             Ok(())
         }

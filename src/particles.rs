@@ -159,6 +159,39 @@ impl<const D: usize> Particles<D> {
         }
     }
 
+    /// Every `f64` array with a name (`pos0`, `vgrad01`, `rho`, …), primary and derived: what a
+    /// checkpoint must hold for a restart to continue bit for bit.
+    pub fn named_arrays_mut(&mut self) -> Vec<(String, &mut Vec<f64>)> {
+        let mut out: Vec<(String, &mut Vec<f64>)> = Vec::new();
+        for (d, v) in self.pos.iter_mut().enumerate() {
+            out.push((format!("pos{d}"), v));
+        }
+        for (d, v) in self.vel.iter_mut().enumerate() {
+            out.push((format!("vel{d}"), v));
+        }
+        for (d, v) in self.acc.iter_mut().enumerate() {
+            out.push((format!("acc{d}"), v));
+        }
+        for (a, row) in self.vgrad.iter_mut().enumerate() {
+            for (b, v) in row.iter_mut().enumerate() {
+                out.push((format!("vgrad{a}{b}"), v));
+            }
+        }
+        let scalars = [
+            ("mass", &mut self.mass),
+            ("u", &mut self.u),
+            ("rho", &mut self.rho),
+            ("p", &mut self.p),
+            ("cs", &mut self.cs),
+            ("du", &mut self.du),
+            ("diss", &mut self.diss),
+            ("vsig", &mut self.vsig),
+            ("nu", &mut self.nu),
+        ];
+        out.extend(scalars.into_iter().map(|(k, v)| (k.to_string(), v)));
+        out
+    }
+
     /// Keeps the particles with `keep[i]` true, in order, in every array.
     pub fn retain(&mut self, keep: &[bool]) {
         fn filter<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {

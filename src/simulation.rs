@@ -1,103 +1,359 @@
-//! One run from a problem file to its outputs: set-up, the first evaluation, the step loop
-//! with progress and snapshots, the final state, the error norms and `summary.json`.
+//! One run from a problem file (or a checkpoint) to its outputs: set-up, the first
+//! evaluation, the step loop with progress, log, snapshots and checkpoints, the final state,
+//! the error norms and `summary.json`.
+//!
+//! Everything the step loop carries from one step to the next lives in [`LoopState`] and
+//! the particles, and both go into each checkpoint: a resumed run continues bit for bit.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde::{Deserialize, Serialize};
 
+use crate::boundary::{BoundaryKind, SimBox};
 use crate::config::{Config, WindowKind};
 use crate::integrate::{StepControl, kdk_step, rhs, time_step};
 use crate::io::atomic::write_atomic;
+use crate::io::checkpoint::{self, CheckpointText};
 use crate::io::csv::write_particles;
+use crate::io::hdf5::{RunMetadata, read_snapshot, write_snapshot};
+use crate::io::log::RunLog;
+use crate::io::snapshot::{PointMassRecord, Snapshot};
 use crate::io::summary::{AccretionLedger, Conservation, Summary, TotalsRecord, peak_rss_bytes};
 use crate::kernel::{KERNEL_NAME, Kernel};
 use crate::particles::Particles;
 use crate::problems::{self, InitialState};
 use crate::sweep::{Physics, Window};
 
-/// How to run: where outputs go, and whether to show progress.
-#[derive(Clone, Debug)]
+/// Default wall-clock seconds between checkpoints.
+const CHECKPOINT_WALL_SECONDS: f64 = 600.0;
+/// Wall-clock seconds between progress lines in `run.log`.
+const LOG_SECONDS: f64 = 30.0;
+
+/// How to run: where outputs go, whether to show progress, where the particles come from,
+/// and when to stop early.
+#[derive(Clone, Debug, Default)]
 pub struct RunOptions {
     pub out: PathBuf,
     pub progress: bool,
+    /// Start from this snapshot's particles instead of the problem's set-up (`--from`).
+    pub from: Option<PathBuf>,
+    /// Stop after this step (counted from the start of the run), writing a checkpoint.
+    pub stop_after: Option<u64>,
 }
 
-/// Runs the problem in the dimension its file names.
-pub fn run(cfg: &Config, opts: &RunOptions) -> Result<Summary> {
-    match cfg.dimension() {
-        1 => run_dim::<1>(cfg, opts),
-        2 => run_dim::<2>(cfg, opts),
-        3 => run_dim::<3>(cfg, opts),
-        d => bail!("key `problem.dimension`: must be 1, 2 or 3, got {d}"),
+impl RunOptions {
+    /// Quiet run into `out`, as tests and scripts want it.
+    pub fn quiet(out: impl Into<PathBuf>) -> Self {
+        Self {
+            out: out.into(),
+            ..Self::default()
+        }
     }
+}
+
+/// How a run ended.
+#[derive(Clone, Debug)]
+pub enum Ended {
+    /// Reached the end time: `summary.json` and `final.csv` are written.
+    Finished(Box<Summary>),
+    /// Stopped at `--stop-after`: resume from `checkpoint`.
+    Stopped {
+        step: u64,
+        time: f64,
+        checkpoint: PathBuf,
+    },
 }
 
 /// Final state of a run, for callers that want the particles themselves (tests, benchmarks).
 pub struct Outcome<const D: usize> {
-    pub summary: Summary,
+    pub ended: Ended,
     pub particles: Particles<D>,
 }
 
-fn run_dim<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Summary> {
-    Ok(run_with_state::<D>(cfg, opts)?.summary)
+impl<const D: usize> Outcome<D> {
+    /// The summary of a finished run.
+    pub fn summary(&self) -> Result<&Summary> {
+        match &self.ended {
+            Ended::Finished(s) => Ok(s),
+            Ended::Stopped { step, .. } => bail!("the run stopped early at step {step}"),
+        }
+    }
 }
 
-/// Runs a problem of dimension `D` and returns the summary with the final particles.
+/// Runs the problem in the dimension its file names.
+pub fn run(cfg: &Config, opts: &RunOptions) -> Result<Ended> {
+    match cfg.dimension() {
+        1 => Ok(run_with_state::<1>(cfg, opts)?.ended),
+        2 => Ok(run_with_state::<2>(cfg, opts)?.ended),
+        3 => Ok(run_with_state::<3>(cfg, opts)?.ended),
+        d => bail!("key `problem.dimension`: must be 1, 2 or 3, got {d}"),
+    }
+}
+
+/// Continues the run in `opts.out` from its newest readable checkpoint; `overrides` may
+/// change keys of the problem file as it was run (e.g. `time.end` to extend a run).
+pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
+    let newest = checkpoint::list(&opts.out)?;
+    let first = newest.first().with_context(|| {
+        format!(
+            "{} has no checkpoint to resume from (looked in {})",
+            opts.out.display(),
+            checkpoint::folder(&opts.out).display()
+        )
+    })?;
+    match checkpoint::dimension(first).or_else(|e| {
+        // The newest may be unreadable; the previous one names the dimension as well.
+        newest.get(1).map_or(Err(e), |p| checkpoint::dimension(p))
+    })? {
+        1 => Ok(resume_with_state::<1>(overrides, opts)?.ended),
+        2 => Ok(resume_with_state::<2>(overrides, opts)?.ended),
+        _ => Ok(resume_with_state::<3>(overrides, opts)?.ended),
+    }
+}
+
+/// What the step loop carries between steps, besides the particles: saved in checkpoints.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct LoopState {
+    t: f64,
+    steps: u64,
+    t_end: f64,
+    h: f64,
+    box_min: Vec<f64>,
+    box_max: Vec<f64>,
+    box_kinds: Vec<BoundaryKind>,
+    out_times: Vec<f64>,
+    next_snap: usize,
+    snapshots: SnapshotIndex,
+    accreted: AccretionLedger,
+    totals_start: TotalsRecord,
+    prev: TotalsRecord,
+    max_dp_step: f64,
+    peak_pairs: usize,
+    peak_bytes: usize,
+    pairs_total: u64,
+    updates: u64,
+    interactions_sum: u64,
+    evaluations: u64,
+    ghosts: usize,
+    /// Wall seconds spent before this process started (earlier parts of a resumed run).
+    wall_before: f64,
+}
+
+impl LoopState {
+    fn sim_box<const D: usize>(&self) -> Result<SimBox<D>> {
+        if self.box_min.len() != D || self.box_max.len() != D || self.box_kinds.len() != D {
+            bail!("checkpoint box is not {D}-dimensional");
+        }
+        Ok(SimBox {
+            min: std::array::from_fn(|d| self.box_min[d]),
+            max: std::array::from_fn(|d| self.box_max[d]),
+            kinds: std::array::from_fn(|d| self.box_kinds[d]),
+        })
+    }
+}
+
+/// A run in progress: configuration, physics, particles and loop state.
+struct Run<const D: usize> {
+    cfg: Config,
+    phys: Physics<D>,
+    bx: SimBox<D>,
+    p: Particles<D>,
+    st: LoopState,
+    window: Window,
+    ctl: StepControl,
+    evolve_u: bool,
+    meta: RunMetadata,
+}
+
+impl<const D: usize> Run<D> {
+    fn new(cfg: Config, p: Particles<D>, st: LoopState, bx: SimBox<D>) -> Self {
+        let phys = Physics {
+            kernel: Kernel::<D>::new(st.h),
+            eos: cfg.eos,
+            av: cfg.artificial_viscosity,
+            viscosity: cfg.viscosity,
+            gravity: cfg.gravity,
+        };
+        let window = match cfg.sweep.window {
+            WindowKind::Sweep => Window::Sweep,
+            WindowKind::Full => Window::FullList,
+        };
+        let ctl = StepControl {
+            courant: cfg.time.courant,
+            force: cfg.time.force,
+            energy: cfg.time.energy,
+            viscous: cfg.time.viscous,
+        };
+        let meta = RunMetadata {
+            parameters: cfg.flattened(),
+            units: cfg.units.unwrap_or_default(),
+            periodic: bx.kinds.iter().all(|k| *k == BoundaryKind::Periodic),
+        };
+        Self {
+            evolve_u: cfg.eos.evolves_energy(),
+            cfg,
+            phys,
+            bx,
+            p,
+            st,
+            window,
+            ctl,
+            meta,
+        }
+    }
+
+    fn snapshot(&self) -> Snapshot {
+        let mut s = Snapshot::from_particles(
+            &self.p,
+            self.st.h,
+            self.bx.min,
+            self.bx.max,
+            self.st.t,
+            self.st.steps,
+        );
+        if let Some(g) = &self.phys.gravity {
+            s.point_masses.push(PointMassRecord {
+                id: u64::MAX,
+                pos: [0.0; 3],
+                vel: [0.0; 3],
+                mass: g.gm,
+            });
+        }
+        s
+    }
+
+    fn write_snapshot(&mut self, dir: &Path, log: &mut RunLog) -> Result<()> {
+        let file = format!("snap_{:04}.hdf5", self.st.snapshots.snapshots.len());
+        let files = self.cfg.output.files_per_snapshot.unwrap_or(1);
+        write_snapshot(&dir.join(&file), &self.snapshot(), &self.meta, files)?;
+        log.line(&format!(
+            "snapshot {file} at t = {} (step {})",
+            self.st.t, self.st.steps
+        ));
+        self.st.snapshots.snapshots.push(SnapshotEntry {
+            file,
+            time: self.st.t,
+            step: self.st.steps,
+            files,
+        });
+        let text = serde_json::to_string_pretty(&self.st.snapshots)?;
+        write_atomic(&dir.join("snapshots.json"), text.as_bytes())
+    }
+
+    fn write_checkpoint(&mut self, dir: &Path, wall: f64, log: &mut RunLog) -> Result<PathBuf> {
+        let mut st = self.st.clone();
+        st.wall_before = wall;
+        let text = CheckpointText {
+            config_toml: toml::to_string(&self.cfg).context("cannot write the configuration")?,
+            state_json: serde_json::to_string(&st)?,
+        };
+        let path = checkpoint::write(dir, self.st.steps, &text, &mut self.p)?;
+        log.line(&format!(
+            "checkpoint {} at t = {} (step {})",
+            path.display(),
+            self.st.t,
+            self.st.steps
+        ));
+        Ok(path)
+    }
+}
+
+/// Runs a problem of dimension `D` and returns how it ended with the final particles.
 pub fn run_with_state<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Outcome<D>> {
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create output folder {}", opts.out.display()))?;
+    let mut log = RunLog::open(&opts.out)?;
+    let mut run = start_fresh::<D>(cfg, opts)?;
+    log.line(&format!(
+        "start {}: {} particles, {D}D, t_end = {}, {} threads",
+        cfg.name(),
+        run.p.len(),
+        run.st.t_end,
+        rayon::current_num_threads()
+    ));
+    if !run.st.out_times.is_empty() {
+        run.write_snapshot(&opts.out, &mut log)?;
+    }
+    advance(run, opts, log)
+}
+
+/// Continues the run in `opts.out` (dimension `D`) from its newest readable checkpoint.
+pub fn resume_with_state<const D: usize>(
+    overrides: &[String],
+    opts: &RunOptions,
+) -> Result<Outcome<D>> {
+    let mut log = RunLog::open(&opts.out)?;
+    let mut last_err = None;
+    for path in checkpoint::list(&opts.out)? {
+        match checkpoint::read::<D>(&path) {
+            Ok((text, p)) => {
+                let mut table: toml::Table = text
+                    .config_toml
+                    .parse()
+                    .with_context(|| format!("{}: stored configuration", path.display()))?;
+                for o in overrides {
+                    crate::config::apply_override(&mut table, o)?;
+                }
+                let cfg = Config::from_table(table)?;
+                let mut st: LoopState = serde_json::from_str(&text.state_json)
+                    .with_context(|| format!("{}: stored run state", path.display()))?;
+                if let Some(end) = cfg.time.end
+                    && end != st.t_end
+                {
+                    st.t_end = end;
+                    st.out_times.retain(|&x| x <= end);
+                }
+                let bx = st.sim_box::<D>()?;
+                log.line(&format!(
+                    "resume from {} at t = {} (step {})",
+                    path.display(),
+                    st.t,
+                    st.steps
+                ));
+                return advance(Run::new(cfg, p, st, bx), opts, log);
+            }
+            Err(e) => {
+                log.line(&format!("skip unreadable checkpoint: {e:#}"));
+                last_err = Some(e);
+            }
+        }
+    }
+    match last_err {
+        Some(e) => Err(e.context("no readable checkpoint to resume from")),
+        None => bail!("{} has no checkpoint to resume from", opts.out.display()),
+    }
+}
+
+/// Set-up, the first evaluation, and the snapshot times of a new run.
+fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>> {
     let InitialState {
-        particles: mut p,
+        particles,
         bx,
         h,
         pressure_equilibrium,
         t_end: problem_t_end,
         output_times,
     } = problems::setup::<D>(cfg)?;
-    let phys = Physics {
-        kernel: Kernel::<D>::new(h),
-        eos: cfg.eos,
-        av: cfg.artificial_viscosity,
-        viscosity: cfg.viscosity,
-        gravity: cfg.gravity,
+    let particles = match &opts.from {
+        None => particles,
+        Some(path) => {
+            let p = read_snapshot(path)?
+                .to_particles::<D>()
+                .with_context(|| format!("--from {}", path.display()))?;
+            let state = InitialState::new(p, bx, h);
+            problems::check_initial_state(&state)
+                .with_context(|| format!("--from {}", path.display()))?;
+            state.particles
+        }
     };
-    let gravity = phys.gravity.as_ref();
-    let window = match cfg.sweep.window {
-        WindowKind::Sweep => Window::Sweep,
-        WindowKind::Full => Window::FullList,
-    };
-    let ctl = StepControl {
-        courant: cfg.time.courant,
-        force: cfg.time.force,
-        energy: cfg.time.energy,
-        viscous: cfg.time.viscous,
-    };
-    let evolve_u = cfg.eos.evolves_energy();
     let t_end = cfg
         .time
         .end
         .or(problem_t_end)
         .context("key `time.end`: missing")?;
-
-    let start = Instant::now();
-    let mut stats = rhs(&mut p, &bx, &phys, window);
-    if let Some(p0) = pressure_equilibrium {
-        for i in 0..p.len() {
-            p.u[i] = cfg.eos.internal_energy(p.rho[i], p0);
-        }
-        stats = rhs(&mut p, &bx, &phys, window);
-    }
-    let totals_start = p.totals(gravity);
-    let mut peak_pairs = stats.peak_pairs;
-    let mut peak_bytes = stats.peak_window_bytes;
-    let mut pairs_total: u64 = 0;
-    let mut updates: u64 = 0;
-    let mut interactions_sum: u64 = p.interactions.iter().map(|&k| k as u64).sum();
-    let mut evaluations: u64 = 1;
-    let mut accreted = AccretionLedger::default();
-
     // Snapshot times: multiples of output.interval and the problem's own times.
     let mut out_times: Vec<f64> = output_times
         .into_iter()
@@ -109,171 +365,271 @@ pub fn run_with_state<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result
     }
     out_times.sort_by(f64::total_cmp);
     out_times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t_end);
-    let mut snapshots = SnapshotIndex::default();
-    if !out_times.is_empty() {
-        snapshots.write(&opts.out, &p, h, 0.0, 0)?;
+
+    let zero = TotalsRecord::from(&particles.totals(None));
+    let st = LoopState {
+        t: 0.0,
+        steps: 0,
+        t_end,
+        h,
+        box_min: bx.min.to_vec(),
+        box_max: bx.max.to_vec(),
+        box_kinds: bx.kinds.to_vec(),
+        out_times,
+        next_snap: 0,
+        snapshots: SnapshotIndex::default(),
+        accreted: AccretionLedger::default(),
+        totals_start: zero.clone(),
+        prev: zero,
+        max_dp_step: 0.0,
+        peak_pairs: 0,
+        peak_bytes: 0,
+        pairs_total: 0,
+        updates: 0,
+        interactions_sum: 0,
+        evaluations: 1,
+        ghosts: 0,
+        wall_before: 0.0,
+    };
+    let mut run = Run::new(cfg.clone(), particles, st, bx);
+    let mut stats = rhs(&mut run.p, &run.bx, &run.phys, run.window);
+    if let Some(p0) = pressure_equilibrium {
+        for i in 0..run.p.len() {
+            run.p.u[i] = cfg.eos.internal_energy(run.p.rho[i], p0);
+        }
+        stats = rhs(&mut run.p, &run.bx, &run.phys, run.window);
     }
-    let mut next_snap = 0usize;
+    let totals = TotalsRecord::from(&run.p.totals(run.phys.gravity.as_ref()));
+    run.st.totals_start = totals.clone();
+    run.st.prev = totals;
+    run.st.peak_pairs = stats.peak_pairs;
+    run.st.peak_bytes = stats.peak_window_bytes;
+    run.st.ghosts = stats.ghosts;
+    run.st.interactions_sum = run.p.interactions.iter().map(|&k| k as u64).sum();
+    Ok(run)
+}
+
+/// The step loop, from wherever `run` stands to the end time (or `opts.stop_after`).
+fn advance<const D: usize>(
+    mut run: Run<D>,
+    opts: &RunOptions,
+    mut log: RunLog,
+) -> Result<Outcome<D>> {
+    let start = Instant::now();
+    let wall = |st: &LoopState| st.wall_before + start.elapsed().as_secs_f64();
+    let gravity = run.phys.gravity;
+    let gravity = gravity.as_ref();
+    let t_end = run.st.t_end;
+    let ckpt_steps = run.cfg.output.checkpoint_steps;
+    let ckpt_wall = run
+        .cfg
+        .output
+        .checkpoint_wall_seconds
+        .unwrap_or(CHECKPOINT_WALL_SECONDS);
+    let mut last_ckpt = Instant::now();
+    let mut last_log = Instant::now();
+    let updates_at_start = run.st.updates;
 
     let bar = progress_bar(opts.progress);
-    let mut t = 0.0;
-    let mut steps: u64 = 0;
-    let mut max_dp_step: f64 = 0.0;
-    let mut prev = totals_start;
-    while t < t_end * (1.0 - 1e-12) {
-        if steps >= cfg.time.max_steps {
+    while run.st.t < t_end * (1.0 - 1e-12) {
+        let st = &mut run.st;
+        if st.steps >= run.cfg.time.max_steps {
             bail!(
-                "reached time.max_steps = {} at t = {t:.6} before time.end = {t_end}",
-                cfg.time.max_steps
+                "reached time.max_steps = {} at t = {:.6} before time.end = {t_end}",
+                run.cfg.time.max_steps,
+                st.t
             );
         }
-        let mut dt = time_step(&p, h, &ctl, evolve_u);
+        let mut dt = time_step(&run.p, st.h, &run.ctl, run.evolve_u);
         if !(dt > 0.0 && dt.is_finite()) {
-            bail!("time step is {dt} at t = {t}: the state is not physical (check the set-up)");
+            bail!(
+                "time step is {dt} at t = {}: the state is not physical (check the set-up)",
+                st.t
+            );
         }
-        let target = out_times
-            .get(next_snap)
+        let target = st
+            .out_times
+            .get(st.next_snap)
             .copied()
             .unwrap_or(t_end)
             .min(t_end);
-        let lands = t + dt >= target * (1.0 - 1e-12);
+        let lands = st.t + dt >= target * (1.0 - 1e-12);
         if lands {
-            dt = target - t;
+            dt = target - st.t;
         }
-        updates += p.len() as u64;
-        let s = kdk_step(&mut p, &bx, &phys, window, dt);
-        t = if lands { target } else { t + dt };
-        steps += 1;
-        evaluations += 1;
-        pairs_total += s.pairs;
-        peak_pairs = peak_pairs.max(s.peak_pairs);
-        peak_bytes = peak_bytes.max(s.peak_window_bytes);
-        interactions_sum += p.interactions.iter().map(|&k| k as u64).sum::<u64>();
-        let now = p.totals(gravity);
-        let (_, dp, _) = now.drift_from(&prev);
-        max_dp_step = max_dp_step.max(dp);
-        prev = now;
+        st.updates += run.p.len() as u64;
+        let s = kdk_step(&mut run.p, &run.bx, &run.phys, run.window, dt);
+        st.t = if lands { target } else { st.t + dt };
+        st.steps += 1;
+        st.evaluations += 1;
+        st.pairs_total += s.pairs;
+        st.peak_pairs = st.peak_pairs.max(s.peak_pairs);
+        st.peak_bytes = st.peak_bytes.max(s.peak_window_bytes);
+        st.ghosts = s.ghosts;
+        st.interactions_sum += run.p.interactions.iter().map(|&k| k as u64).sum::<u64>();
+        let now = run.p.totals(gravity);
+        let (_, dp, _) = now.drift_from(&st.prev.to_totals::<D>());
+        st.max_dp_step = st.max_dp_step.max(dp);
+        st.prev = TotalsRecord::from(&now);
         if let Some(g) = gravity
             && let Some(r_acc) = g.accretion_radius
-            && accreted.accrete(&mut p, r_acc, g) > 0
+            && st.accreted.accrete(&mut run.p, r_acc, g) > 0
         {
-            if p.is_empty() {
-                bail!("every particle was accreted by t = {t:.6}");
+            if run.p.is_empty() {
+                bail!("every particle was accreted by t = {:.6}", st.t);
             }
-            prev = p.totals(gravity);
+            st.prev = TotalsRecord::from(&run.p.totals(gravity));
         }
-        if let Some(i) = p.u.iter().position(|u| !u.is_finite() || *u < 0.0) {
+        if let Some(i) = run.p.u.iter().position(|u| !u.is_finite() || *u < 0.0) {
             bail!(
-                "particle {} has internal energy {} at t = {t:.6} (step {steps}): reduce time.courant or time.energy",
-                p.id[i],
-                p.u[i]
+                "particle {} has internal energy {} at t = {:.6} (step {}): reduce time.courant or time.energy",
+                run.p.id[i],
+                run.p.u[i],
+                st.t,
+                st.steps
             );
         }
-        if lands && next_snap < out_times.len() {
-            next_snap += 1;
-            snapshots.write(&opts.out, &p, h, t, steps)?;
+        let (t, steps) = (st.t, st.steps);
+        let snap_due = lands && st.next_snap < st.out_times.len();
+        if snap_due {
+            st.next_snap += 1;
+            run.write_snapshot(&opts.out, &mut log)?;
+        }
+        let stop = opts.stop_after.is_some_and(|k| steps >= k) && t < t_end * (1.0 - 1e-12);
+        let ckpt_due = snap_due
+            || ckpt_steps.is_some_and(|k| steps % k == 0)
+            || last_ckpt.elapsed().as_secs_f64() >= ckpt_wall;
+        if ckpt_due || stop {
+            let w = wall(&run.st);
+            let path = run.write_checkpoint(&opts.out, w, &mut log)?;
+            last_ckpt = Instant::now();
+            if stop {
+                bar.finish_and_clear();
+                log.line(&format!("stopped after step {steps} at t = {t}"));
+                return Ok(Outcome {
+                    ended: Ended::Stopped {
+                        step: steps,
+                        time: t,
+                        checkpoint: path,
+                    },
+                    particles: run.p,
+                });
+            }
+        }
+        let rate = (run.st.updates - updates_at_start) as f64 / start.elapsed().as_secs_f64();
+        if last_log.elapsed().as_secs_f64() >= LOG_SECONDS {
+            last_log = Instant::now();
+            log.line(&format!(
+                "t = {t:.6} step {steps} N = {} dt = {dt:.3e} {rate:.3e} updates/s",
+                run.p.len()
+            ));
         }
         bar.set_position((t / t_end * 1000.0) as u64);
         bar.set_message(format!(
-            "t = {t:.4}  step {steps}  N = {}  dt = {dt:.2e}",
-            p.len()
+            "t = {t:.4}  step {steps}  N = {}  dt = {dt:.2e}  {rate:.2e} updates/s",
+            run.p.len()
         ));
     }
     bar.finish_and_clear();
-    let wall = start.elapsed().as_secs_f64();
+    // A checkpoint of the end state lets `--resume --set time.end=…` extend the run.
+    if checkpoint::list(&opts.out)?
+        .first()
+        .is_none_or(|c| !c.ends_with(format!("ckpt_{:010}.hdf5", run.st.steps)))
+    {
+        let w = wall(&run.st);
+        run.write_checkpoint(&opts.out, w, &mut log)?;
+    }
+    let summary = finish(&run, wall(&run.st), &opts.out)?;
+    log.line(&format!(
+        "end at t = {} after {} steps, {:.2} s, {:.3e} updates/s",
+        summary.t_end, summary.steps, summary.wall_seconds, summary.particle_updates_per_second
+    ));
+    Ok(Outcome {
+        ended: Ended::Finished(Box::new(summary)),
+        particles: run.p,
+    })
+}
 
-    write_particles(&opts.out.join("final.csv"), &p, h)?;
+/// The final state, error norms and `summary.json` of a run that reached its end time.
+fn finish<const D: usize>(run: &Run<D>, wall: f64, out: &Path) -> Result<Summary> {
+    let (p, st, cfg) = (&run.p, &run.st, &run.cfg);
+    let gravity = run.phys.gravity.as_ref();
+    write_particles(&out.join("final.csv"), p, st.h)?;
+    write_snapshot(&out.join("final.hdf5"), &run.snapshot(), &run.meta, 1)?;
+    let totals_start = st.totals_start.to_totals::<D>();
     let totals_end = p.totals(gravity);
     // Conservation counts what was accreted as still present.
     let mut with_accreted = totals_end;
-    accreted.add_to(&mut with_accreted);
+    st.accreted.add_to(&mut with_accreted);
     let (dm, dp, de) = with_accreted.drift_from(&totals_start);
     let l0 = totals_start.angular_momentum;
     let dl = (with_accreted.angular_momentum - l0).abs() / l0.abs().max(f64::MIN_POSITIVE);
-    let errors = problems::errors(cfg, &p, &bx, h, t)?;
+    let errors = problems::errors(cfg, p, &run.bx, st.h, st.t)?;
     let n = p.len();
     let ring = match cfg.problem.kind {
         crate::config::ProblemKind::Ring => Some(problems::ring::record(cfg)?),
         _ => None,
     };
+    let per_second = |x: u64| if wall > 0.0 { x as f64 / wall } else { 0.0 };
     let summary = Summary {
         problem: cfg.name().to_string(),
         dimension: D,
         particles: n,
-        steps,
-        t_end: t,
+        steps: st.steps,
+        t_end: st.t,
         wall_seconds: wall,
-        particle_updates_per_second: if wall > 0.0 {
-            updates as f64 / wall
-        } else {
-            0.0
-        },
-        pairs_per_second: if wall > 0.0 {
-            pairs_total as f64 / wall
-        } else {
-            0.0
-        },
-        peak_pair_window: peak_pairs,
+        particle_updates_per_second: per_second(st.updates),
+        pairs_per_second: per_second(st.pairs_total),
+        peak_pair_window: st.peak_pairs,
         threads: rayon::current_num_threads(),
         ranks: 1,
         conservation: Conservation {
             mass: dm,
             momentum: dp,
-            energy: evolve_u.then_some(de),
-            momentum_max_per_step: max_dp_step,
+            energy: run.evolve_u.then_some(de),
+            momentum_max_per_step: st.max_dp_step,
             angular_momentum: (D >= 2 && l0 != 0.0).then_some(dl),
         },
         errors,
-        smoothing_length: h,
+        smoothing_length: st.h,
         kernel: KERNEL_NAME.to_string(),
-        mean_neighbours: interactions_sum as f64 / (evaluations as f64 * n as f64),
-        ghosts: stats.ghosts,
-        peak_window_bytes: peak_bytes,
+        mean_neighbours: st.interactions_sum as f64 / (st.evaluations as f64 * n as f64),
+        ghosts: st.ghosts,
+        peak_window_bytes: st.peak_bytes,
         peak_rss_bytes: peak_rss_bytes(),
-        totals_start: TotalsRecord::from(&totals_start),
+        totals_start: st.totals_start.clone(),
         totals_end: TotalsRecord::from(&totals_end),
         accretion: gravity
             .and_then(|g| g.accretion_radius)
-            .map(|_| accreted.clone()),
+            .map(|_| st.accreted.clone()),
         ring,
     };
-    summary.write(&opts.out.join("summary.json"))?;
-    Ok(Outcome {
-        summary,
-        particles: p,
-    })
+    summary.write(&out.join("summary.json"))?;
+    Ok(summary)
 }
 
 /// Snapshots written so far, listed in `snapshots.json` (file, time, step) so that tools
 /// can find each snapshot's time.
-#[derive(Default, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct SnapshotIndex {
     pub snapshots: Vec<SnapshotEntry>,
 }
 
-#[derive(Clone, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SnapshotEntry {
+    /// The snapshot's name; with `files` > 1 its parts are `snap_NNNN.k.hdf5`.
     pub file: String,
     pub time: f64,
     pub step: u64,
+    #[serde(default = "one_file")]
+    pub files: usize,
+}
+
+fn one_file() -> usize {
+    1
 }
 
 impl SnapshotIndex {
-    fn write<const D: usize>(
-        &mut self,
-        dir: &Path,
-        p: &Particles<D>,
-        h: f64,
-        time: f64,
-        step: u64,
-    ) -> Result<()> {
-        let file = format!("snap_{:04}.csv", self.snapshots.len());
-        write_particles(&dir.join(&file), p, h)?;
-        self.snapshots.push(SnapshotEntry { file, time, step });
-        let text = serde_json::to_string_pretty(self)?;
-        write_atomic(&dir.join("snapshots.json"), text.as_bytes())
-    }
-
     pub fn read(dir: &Path) -> Result<Self> {
         let path = dir.join("snapshots.json");
         let text = std::fs::read_to_string(&path).with_context(|| {

@@ -75,5 +75,5 @@ fn accretion_ledger_balances_to_round_off() {
 fn r_initial_count(r: &common::Run<2>) -> u64 {
     let snaps = sphdisk::simulation::SnapshotIndex::read(r.dir.path()).unwrap();
     let first = r.dir.path().join(&snaps.snapshots[0].file);
-    sphdisk::io::csv::read_particles::<2>(&first).unwrap().len() as u64
+    sphdisk::io::hdf5::read_snapshot(&first).unwrap().len() as u64
 }

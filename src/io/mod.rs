@@ -2,6 +2,9 @@
 //! conditions), `summary.json`, and the atomic write that keeps what was written valid.
 
 pub mod atomic;
+pub mod checkpoint;
 pub mod csv;
+pub mod hdf5;
+pub mod log;
 pub mod snapshot;
 pub mod summary;

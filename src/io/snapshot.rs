@@ -1,7 +1,13 @@
 //! The dimension-free particle snapshot: what an HDF5 snapshot file holds, in memory. Written
 //! from `Particles<D>` at output times, read back by `render`, `analyse` and `run --from`.
 //! Coordinates and velocities are always three columns (SWIFT's convention); the ones beyond
-//! the run's dimension are zero.
+//! the run's dimension are zero. As in SWIFT, coordinates are stored in a box that starts at
+//! the origin, `[0, BoxSize]`, which yt and swiftsimio assume: a run whose box starts
+//! elsewhere is shifted by `shift` (file position = run position + shift), and
+//! `to_particles` shifts back (exact to the last bit when the box starts at 0, else to
+//! round-off of the coordinates).
+
+use anyhow::{Result, bail};
 
 use crate::particles::Particles;
 
@@ -13,9 +19,12 @@ pub struct Snapshot {
     pub time: f64,
     /// Step number at which the snapshot was written.
     pub step: u64,
-    /// Lower and upper corners of the simulation box (unused axes: 0 and 1).
+    /// Lower and upper corners of the simulation box in the file's frame (unused axes: 0
+    /// and 1); `box_lo` is 0 for snapshots written by sphdisk.
     pub box_lo: [f64; 3],
     pub box_hi: [f64; 3],
+    /// What was added to the run's positions (SWIFT's `Header/Shift`): −(run box corner).
+    pub shift: [f64; 3],
     pub id: Vec<u64>,
     pub pos: [Vec<f64>; 3],
     pub vel: [Vec<f64>; 3],
@@ -63,18 +72,28 @@ impl Snapshot {
         let pad = |v: &[Vec<f64>; D]| -> [Vec<f64>; 3] {
             std::array::from_fn(|d| if d < D { v[d].clone() } else { vec![0.0; n] })
         };
-        let mut box_lo = [0.0; 3];
+        let mut shift = [0.0; 3];
         let mut box_hi = [1.0; 3];
-        box_lo[..D].copy_from_slice(&lo);
-        box_hi[..D].copy_from_slice(&hi);
+        for d in 0..D {
+            shift[d] = -lo[d];
+            box_hi[d] = hi[d] - lo[d];
+        }
+        let pos = std::array::from_fn(|d| {
+            if d < D {
+                p.pos[d].iter().map(|x| x + shift[d]).collect()
+            } else {
+                vec![0.0; n]
+            }
+        });
         Self {
             dimension: D,
             time,
             step,
-            box_lo,
+            box_lo: [0.0; 3],
             box_hi,
+            shift,
             id: p.id.clone(),
-            pos: pad(&p.pos),
+            pos,
             vel: pad(&p.vel),
             mass: p.mass.clone(),
             h: vec![h; n],
@@ -84,5 +103,26 @@ impl Snapshot {
             diss: p.diss.clone(),
             point_masses: Vec::new(),
         }
+    }
+
+    /// The gas particles as `Particles<D>` (primary state, and ρ, p, dissipation as stored);
+    /// refuses a snapshot of another dimension.
+    pub fn to_particles<const D: usize>(&self) -> Result<Particles<D>> {
+        if self.dimension != D {
+            bail!(
+                "the snapshot is {}D but the problem is {D}D (key `problem.dimension`)",
+                self.dimension
+            );
+        }
+        let mut p = Particles::new();
+        for i in 0..self.len() {
+            let x = std::array::from_fn(|d| self.pos[d][i] - self.shift[d]);
+            let v = std::array::from_fn(|d| self.vel[d][i]);
+            p.push(self.id[i], x, v, self.mass[i], self.u[i]);
+        }
+        p.rho.clone_from(&self.rho);
+        p.p.clone_from(&self.p);
+        p.diss.clone_from(&self.diss);
+        Ok(p)
     }
 }

@@ -128,6 +128,9 @@ pub struct Conservation {
 pub struct TotalsRecord {
     pub mass: f64,
     pub momentum: Vec<f64>,
+    /// Σ m|v|, the scale of momentum drifts.
+    #[serde(default)]
+    pub momentum_scale: f64,
     pub angular_momentum: f64,
     pub kinetic_energy: f64,
     pub internal_energy: f64,
@@ -135,11 +138,27 @@ pub struct TotalsRecord {
     pub energy: f64,
 }
 
+impl TotalsRecord {
+    /// The totals back in their dimension-typed form (exact: every field is kept).
+    pub fn to_totals<const D: usize>(&self) -> crate::particles::Totals<D> {
+        crate::particles::Totals {
+            mass: self.mass,
+            momentum: std::array::from_fn(|d| self.momentum.get(d).copied().unwrap_or(0.0)),
+            momentum_scale: self.momentum_scale,
+            angular_momentum: self.angular_momentum,
+            kinetic: self.kinetic_energy,
+            internal: self.internal_energy,
+            potential: self.potential_energy,
+        }
+    }
+}
+
 impl<const D: usize> From<&crate::particles::Totals<D>> for TotalsRecord {
     fn from(t: &crate::particles::Totals<D>) -> Self {
         Self {
             mass: t.mass,
             momentum: t.momentum.to_vec(),
+            momentum_scale: t.momentum_scale,
             angular_momentum: t.angular_momentum,
             kinetic_energy: t.kinetic,
             internal_energy: t.internal,

@@ -22,13 +22,10 @@ pub fn run_problem<const D: usize>(file: &str, sets: &[&str]) -> Run<D> {
     let cfg = Config::load(&path, &sets).expect("problem file loads");
     assert_eq!(cfg.dimension(), D, "dimension of {file}");
     let dir = tempfile::tempdir().expect("temporary folder");
-    let opts = RunOptions {
-        out: dir.path().to_path_buf(),
-        progress: false,
-    };
+    let opts = RunOptions::quiet(dir.path());
     let out = run_with_state::<D>(&cfg, &opts).expect("run succeeds");
     Run {
-        summary: out.summary,
+        summary: out.summary().expect("run finishes").clone(),
         particles: out.particles,
         dir,
     }

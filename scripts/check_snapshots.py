@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""CI check that the community's tools open sphdisk's snapshots.
+
+1. yt's SWIFT front end loads a 3D snapshot: the particle count and total mass equal the
+   header's and the particles' own, and the SPH density field is the one stored.
+2. h5py reads a snapshot split over several files (SWIFT's multi-file convention): the
+   parts' NumPart_ThisFile add up to NumPart_Total and together hold every particle once.
+
+Usage: scripts/check_snapshots.py [path/to/sphdisk]   (default target/release/sphdisk)
+"""
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+import yt
+
+yt.set_log_level(40)
+root = pathlib.Path(__file__).resolve().parent.parent
+exe = sys.argv[1] if len(sys.argv) > 1 else str(root / "target/release/sphdisk")
+
+
+def run(problem, out, *sets):
+    args = [exe, "run", str(root / "problems" / problem), "--quiet", "--out", str(out)]
+    for s in sets:
+        args += ["--set", s]
+    subprocess.run(args, check=True)
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    tmp = pathlib.Path(tmp)
+
+    # 1. yt on a 3D snapshot (Sedov blast, 20³ particles).
+    run("sedov.toml", tmp / "s3", "particles.n=20", "time.end=0.01", "output.interval=0.01")
+    snap = tmp / "s3" / "snap_0001.hdf5"
+    with h5py.File(snap, "r") as f:
+        n_header = int(f["Header"].attrs["NumPart_Total"][0])
+        mass_h5 = float(f["PartType0/Masses"][:].sum())
+        rho_h5 = np.sort(f["PartType0/Densities"][:])
+    ds = yt.load(str(snap))
+    assert type(ds).__name__ == "SwiftDataset", type(ds)
+    assert ds.dimensionality == 3
+    ad = ds.all_data()
+    mass = ad["PartType0", "Mass"]
+    assert len(mass) == n_header == 20**3, (len(mass), n_header)
+    # The same numbers summed in another order: equal to round-off.
+    assert abs(float(mass.sum()) - mass_h5) <= 1e-12 * mass_h5, (float(mass.sum()), mass_h5)
+    rho = np.sort(np.asarray(ad["gas", "density"]))
+    assert np.array_equal(rho, rho_h5), "yt's gas density is not the stored one"
+    assert rho.min() > 0
+    print(f"yt: SwiftDataset, {len(mass)} particles, mass {float(mass.sum()):.15g}, "
+          f"density {rho.min():.4g}..{rho.max():.4g}")
+
+    # 2. h5py on a multi-file snapshot (2D Sedov, 3 files per snapshot).
+    run("sedov2d.toml", tmp / "m", "particles.n=30", "time.end=0.01",
+        "output.interval=0.01", "output.files_per_snapshot=3")
+    parts = sorted((tmp / "m").glob("snap_0001.*.hdf5"))
+    assert len(parts) == 3, parts
+    ids, counts = [], []
+    for k, path in enumerate(parts):
+        with h5py.File(path, "r") as f:
+            h = f["Header"].attrs
+            assert int(h["NumFilesPerSnapshot"]) == 3
+            assert int(h["ThisFile"]) == k
+            total = int(h["NumPart_Total"][0])
+            counts.append(int(h["NumPart_ThisFile"][0]))
+            ids.append(f["PartType0/ParticleIDs"][:])
+            assert f["PartType0/Coordinates"].shape == (counts[-1], 3)
+    ids = np.concatenate(ids)
+    assert sum(counts) == total == 900, (counts, total)
+    assert len(np.unique(ids)) == total, "a particle is missing or repeated"
+    print(f"h5py: multi-file snapshot, {len(parts)} files, {counts} = {total} particles")
+print("snapshot checks passed")

@@ -1,0 +1,823 @@
+//! HDF5 snapshots in SWIFT's layout, written and read with `hdf5-pure` (pure Rust: the
+//! default build needs no HDF5 C library, and files open in h5py, yt and swiftsimio).
+//!
+//! Layout: `/Header` (with `Code = "SWIFT"` as a fixed-length ASCII string, which yt's SWIFT
+//! front end requires), `/Units` (cgs factors of the code units), `/Policy`, `/RuntimePars`,
+//! `/Parameters` (the problem file flattened to `section:key`), `/HydroScheme` (kernel and
+//! smoothing-length convention), `/SubgridScheme`, `/PartType0` (gas) and `/PartType3` (point
+//! masses, SWIFT's sink type). Every dataset carries SWIFT's unit-exponent attributes.
+//!
+//! A snapshot may be split over several files (SWIFT's multi-file convention, one per MPI
+//! rank or `output.files_per_snapshot`): `name.0.hdf5`, `name.1.hdf5`, …, each with its own
+//! `NumPart_ThisFile` and the shared `NumPart_Total` and `NumFilesPerSnapshot`.
+//!
+//! Reading accepts SWIFT's plural names and GADGET's singular ones (`Density`,
+//! `SmoothingLength`, `InternalEnergy`, `Mass` or the header's `MassTable`).
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use hdf5_pure::{AttrValue, File, FileBuilder, GroupBuilder};
+
+use crate::io::atomic::write_atomic;
+use crate::io::snapshot::{PointMassRecord, Snapshot};
+use crate::kernel::KERNEL_NAME;
+
+/// Number of particle types in SWIFT's header arrays.
+const N_TYPES: usize = 7;
+/// SWIFT's particle type for sinks, used here for point masses (central star, binary).
+const POINT_MASS_TYPE: usize = 3;
+
+/// The code units in cgs (`[units]` in a problem file; 1 when absent).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Units {
+    /// Unit mass in grams.
+    #[serde(default = "one")]
+    pub mass_cgs: f64,
+    /// Unit length in centimetres.
+    #[serde(default = "one")]
+    pub length_cgs: f64,
+    /// Unit time in seconds.
+    #[serde(default = "one")]
+    pub time_cgs: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Default for Units {
+    fn default() -> Self {
+        Self {
+            mass_cgs: 1.0,
+            length_cgs: 1.0,
+            time_cgs: 1.0,
+        }
+    }
+}
+
+impl Units {
+    pub fn validate(&self) -> Result<(), String> {
+        for (k, v) in [
+            ("mass_cgs", self.mass_cgs),
+            ("length_cgs", self.length_cgs),
+            ("time_cgs", self.time_cgs),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(format!("key `units.{k}`: must be > 0, got {v}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The cgs factor of a quantity with exponents (mass, length, time).
+    fn factor(&self, e: Exponents) -> f64 {
+        self.mass_cgs.powf(e.m) * self.length_cgs.powf(e.l) * self.time_cgs.powf(e.t)
+    }
+}
+
+/// What a snapshot file says about the run beyond the particles.
+#[derive(Clone, Debug, Default)]
+pub struct RunMetadata {
+    /// The problem file as run, flattened to dotted keys (`Config::flattened`).
+    pub parameters: BTreeMap<String, String>,
+    pub units: Units,
+    /// Whether every axis is periodic (SWIFT's `PeriodicBoundariesOn`).
+    pub periodic: bool,
+}
+
+/// Unit exponents of a dataset: mass, length, time (current and temperature are 0 here).
+#[derive(Clone, Copy)]
+struct Exponents {
+    m: f64,
+    l: f64,
+    t: f64,
+}
+
+const fn exps(m: f64, l: f64, t: f64) -> Exponents {
+    Exponents { m, l, t }
+}
+
+/// The file names of a snapshot written as `num_files` parts: `base` itself for one file,
+/// `stem.k.hdf5` for several (SWIFT's convention).
+pub fn part_paths(base: &Path, num_files: usize) -> Vec<PathBuf> {
+    if num_files <= 1 {
+        return vec![base.to_path_buf()];
+    }
+    let stem = base
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    (0..num_files)
+        .map(|k| base.with_file_name(format!("{stem}.{k}.hdf5")))
+        .collect()
+}
+
+/// Writes `snap` to `base` (one file) or to `num_files` parts split into contiguous ranges of
+/// particles; each file is written atomically.
+pub fn write_snapshot(
+    base: &Path,
+    snap: &Snapshot,
+    meta: &RunMetadata,
+    num_files: usize,
+) -> Result<Vec<PathBuf>> {
+    let num_files = num_files.max(1);
+    let n = snap.len();
+    let paths = part_paths(base, num_files);
+    for (k, path) in paths.iter().enumerate() {
+        let range = (n * k / num_files)..(n * (k + 1) / num_files);
+        let bytes = encode_part(snap, range, k, num_files, meta)
+            .with_context(|| format!("cannot encode snapshot {}", path.display()))?;
+        write_atomic(path, &bytes)?;
+    }
+    Ok(paths)
+}
+
+fn encode_part(
+    snap: &Snapshot,
+    range: std::ops::Range<usize>,
+    file_index: usize,
+    num_files: usize,
+    meta: &RunMetadata,
+) -> Result<Vec<u8>> {
+    let d = snap.dimension as f64;
+    let mut fb = FileBuilder::new();
+
+    // Point masses go with the first file only.
+    let point_masses: &[PointMassRecord] = if file_index == 0 {
+        &snap.point_masses
+    } else {
+        &[]
+    };
+    let mut this_file = [0u64; N_TYPES];
+    this_file[0] = range.len() as u64;
+    this_file[POINT_MASS_TYPE] = point_masses.len() as u64;
+    let mut total = [0u64; N_TYPES];
+    total[0] = snap.len() as u64;
+    total[POINT_MASS_TYPE] = snap.point_masses.len() as u64;
+    let box_size: Vec<f64> = (0..3).map(|a| snap.box_hi[a] - snap.box_lo[a]).collect();
+
+    let mut header = fb.create_group("Header");
+    header.set_attr("Code", AttrValue::AsciiString("SWIFT".into()));
+    header.set_attr(
+        "Producer",
+        AttrValue::AsciiString(format!("sphdisk {}", env!("CARGO_PKG_VERSION"))),
+    );
+    header.set_attr("BoxSize", AttrValue::F64Array(box_size));
+    header.set_attr("Shift", AttrValue::F64Array(snap.shift.to_vec()));
+    header.set_attr("Dimension", AttrValue::I32(snap.dimension as i32));
+    header.set_attr("Time", AttrValue::F64(snap.time));
+    header.set_attr("Step", AttrValue::U64(snap.step));
+    header.set_attr("NumPart_ThisFile", AttrValue::U64Array(this_file.to_vec()));
+    header.set_attr("NumPart_Total", AttrValue::U64Array(total.to_vec()));
+    header.set_attr(
+        "NumPart_Total_HighWord",
+        AttrValue::U64Array(vec![0; N_TYPES]),
+    );
+    header.set_attr("MassTable", AttrValue::F64Array(vec![0.0; N_TYPES]));
+    header.set_attr("NumFilesPerSnapshot", AttrValue::I32(num_files as i32));
+    header.set_attr("ThisFile", AttrValue::I32(file_index as i32));
+    header.set_attr("Flag_Entropy_ICs", AttrValue::I32Array(vec![0; N_TYPES]));
+    header.set_attr("Redshift", AttrValue::F64(0.0));
+    header.set_attr("Scale-factor", AttrValue::F64(1.0));
+    fb.add_group(header.finish());
+
+    let mut units = fb.create_group("Units");
+    let u = meta.units;
+    units.set_attr("Unit mass in cgs (U_M)", AttrValue::F64(u.mass_cgs));
+    units.set_attr("Unit length in cgs (U_L)", AttrValue::F64(u.length_cgs));
+    units.set_attr("Unit time in cgs (U_t)", AttrValue::F64(u.time_cgs));
+    units.set_attr("Unit current in cgs (U_I)", AttrValue::F64(1.0));
+    units.set_attr("Unit temperature in cgs (U_T)", AttrValue::F64(1.0));
+    fb.add_group(units.finish());
+
+    let mut policy = fb.create_group("Policy");
+    for (k, v) in [
+        ("cosmological integration", 0),
+        ("hydro", 1),
+        ("self-gravity", 0),
+        (
+            "external potential",
+            i32::from(!snap.point_masses.is_empty()),
+        ),
+    ] {
+        policy.set_attr(k, AttrValue::I32(v));
+    }
+    fb.add_group(policy.finish());
+
+    let mut runtime = fb.create_group("RuntimePars");
+    runtime.set_attr(
+        "PeriodicBoundariesOn",
+        AttrValue::I32(i32::from(meta.periodic)),
+    );
+    fb.add_group(runtime.finish());
+
+    // SWIFT writes parameters as `Section:key` string attributes.
+    let mut params = fb.create_group("Parameters");
+    for (k, v) in &meta.parameters {
+        params.set_attr(
+            &k.replacen('.', ":", 1),
+            AttrValue::AsciiString(v.trim_matches('"').to_string()),
+        );
+    }
+    fb.add_group(params.finish());
+
+    let mut hydro = fb.create_group("HydroScheme");
+    hydro.set_attr("Scheme", AttrValue::AsciiString("sphdisk SPH".into()));
+    hydro.set_attr(
+        "Kernel function",
+        AttrValue::AsciiString(KERNEL_NAME.into()),
+    );
+    hydro.set_attr(
+        "Smoothing length convention",
+        AttrValue::AsciiString("constant h; kernel support radius 2h (cubic spline)".into()),
+    );
+    hydro.set_attr("Kernel target N_ngb", AttrValue::F64(0.0));
+    hydro.set_attr("Dimension", AttrValue::I32(snap.dimension as i32));
+    fb.add_group(hydro.finish());
+    let subgrid = fb.create_group("SubgridScheme");
+    fb.add_group(subgrid.finish());
+
+    // Gas.
+    let r = range.clone();
+    let mut gas = fb.create_group("PartType0");
+    let vec3 = |v: &[Vec<f64>; 3]| -> Vec<f64> {
+        r.clone()
+            .flat_map(|i| [v[0][i], v[1][i], v[2][i]])
+            .collect()
+    };
+    let n = r.len();
+    // Densities: mass per length^D (2D: surface density); pressure likewise integrated.
+    let vectors = [
+        (
+            "Coordinates",
+            vec3(&snap.pos),
+            exps(0.0, 1.0, 0.0),
+            "Positions",
+        ),
+        (
+            "Velocities",
+            vec3(&snap.vel),
+            exps(0.0, 1.0, -1.0),
+            "Velocities",
+        ),
+    ];
+    for (name, data, e, desc) in vectors {
+        add_dataset(&mut gas, name, &data, Some(&[n as u64, 3]), e, desc, u);
+    }
+    let scalars: [(&str, &[f64], Exponents, &str); 7] = [
+        (
+            "Masses",
+            &snap.mass[r.clone()],
+            exps(1.0, 0.0, 0.0),
+            "Masses",
+        ),
+        (
+            "SmoothingLengths",
+            &snap.h[r.clone()],
+            exps(0.0, 1.0, 0.0),
+            "Smoothing lengths h (kernel support 2h)",
+        ),
+        (
+            "Densities",
+            &snap.rho[r.clone()],
+            exps(1.0, -d, 0.0),
+            "Densities by summation (2D: surface density)",
+        ),
+        (
+            "InternalEnergies",
+            &snap.u[r.clone()],
+            exps(0.0, 2.0, -2.0),
+            "Specific internal energies",
+        ),
+        (
+            "Pressures",
+            &snap.p[r.clone()],
+            exps(1.0, 2.0 - d, -2.0),
+            "Pressures (2D: vertically integrated)",
+        ),
+        (
+            "DissipationRates",
+            &snap.diss[r.clone()],
+            exps(0.0, 2.0, -3.0),
+            "Specific viscous dissipation rates",
+        ),
+        // yt's SWIFT reader asks for the singular name; SWIFT and swiftsimio use the plural.
+        (
+            "SmoothingLength",
+            &snap.h[r.clone()],
+            exps(0.0, 1.0, 0.0),
+            "Smoothing lengths h (copy under the name yt reads)",
+        ),
+    ];
+    for (name, data, e, desc) in scalars {
+        add_dataset(&mut gas, name, data, None, e, desc, u);
+    }
+    let ids = gas.create_dataset("ParticleIDs").with_u64_data(&snap.id[r]);
+    ids.set_attr("Description", AttrValue::AsciiString("Unique IDs".into()));
+    set_unit_attrs(ids, exps(0.0, 0.0, 0.0), u);
+    fb.add_group(gas.finish());
+
+    if !point_masses.is_empty() {
+        let mut pm = fb.create_group(&format!("PartType{POINT_MASS_TYPE}"));
+        let k = point_masses.len() as u64;
+        let pos: Vec<f64> = point_masses.iter().flat_map(|p| p.pos).collect();
+        let vel: Vec<f64> = point_masses.iter().flat_map(|p| p.vel).collect();
+        let mass: Vec<f64> = point_masses.iter().map(|p| p.mass).collect();
+        let ids: Vec<u64> = point_masses.iter().map(|p| p.id).collect();
+        let h0 = vec![0.0; point_masses.len()];
+        add_dataset(
+            &mut pm,
+            "Coordinates",
+            &pos,
+            Some(&[k, 3]),
+            exps(0.0, 1.0, 0.0),
+            "Positions",
+            u,
+        );
+        add_dataset(
+            &mut pm,
+            "Velocities",
+            &vel,
+            Some(&[k, 3]),
+            exps(0.0, 1.0, -1.0),
+            "Velocities",
+            u,
+        );
+        add_dataset(
+            &mut pm,
+            "Masses",
+            &mass,
+            None,
+            exps(1.0, 0.0, 0.0),
+            "Masses (G M with G = 1)",
+            u,
+        );
+        add_dataset(
+            &mut pm,
+            "SmoothingLengths",
+            &h0,
+            None,
+            exps(0.0, 1.0, 0.0),
+            "Softening (0: none)",
+            u,
+        );
+        let ds = pm.create_dataset("ParticleIDs").with_u64_data(&ids);
+        set_unit_attrs(ds, exps(0.0, 0.0, 0.0), u);
+        fb.add_group(pm.finish());
+    }
+
+    Ok(fb.finish()?)
+}
+
+fn add_dataset(
+    g: &mut GroupBuilder,
+    name: &str,
+    data: &[f64],
+    shape: Option<&[u64]>,
+    e: Exponents,
+    description: &str,
+    units: Units,
+) {
+    let ds = g.create_dataset(name).with_f64_data(data);
+    if let Some(s) = shape {
+        ds.with_shape(s);
+    }
+    ds.set_attr("Description", AttrValue::AsciiString(description.into()));
+    set_unit_attrs(ds, e, units);
+}
+
+/// SWIFT's per-dataset unit attributes, which swiftsimio reads to attach units.
+fn set_unit_attrs(ds: &mut hdf5_pure::DatasetBuilder, e: Exponents, units: Units) {
+    ds.set_attr("U_M exponent", AttrValue::F32(e.m as f32));
+    ds.set_attr("U_L exponent", AttrValue::F32(e.l as f32));
+    ds.set_attr("U_t exponent", AttrValue::F32(e.t as f32));
+    ds.set_attr("U_I exponent", AttrValue::F32(0.0));
+    ds.set_attr("U_T exponent", AttrValue::F32(0.0));
+    ds.set_attr("a-scale exponent", AttrValue::F32(0.0));
+    ds.set_attr("h-scale exponent", AttrValue::F32(0.0));
+    let f = units.factor(e);
+    ds.set_attr(
+        "Conversion factor to CGS (not including cosmological corrections)",
+        AttrValue::F64(f),
+    );
+    ds.set_attr(
+        "Conversion factor to physical CGS (including cosmological corrections)",
+        AttrValue::F64(f),
+    );
+}
+
+/// Reads a snapshot: one file, or all parts of a multi-file snapshot when given `name.hdf5`
+/// whose parts are `name.k.hdf5` (or any one part, which names the others).
+pub fn read_snapshot(path: &Path) -> Result<Snapshot> {
+    let first = if path.exists() {
+        path.to_path_buf()
+    } else {
+        let p0 = part_paths(path, 2).remove(0);
+        if !p0.exists() {
+            bail!("cannot read snapshot {}: no such file", path.display());
+        }
+        p0
+    };
+    let (mut snap, num_files, this_file) = read_one(&first)?;
+    if num_files > 1 {
+        // Find the base name from `stem.k.hdf5` and read the other parts in order.
+        let stem = first
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let base_stem = stem
+            .strip_suffix(&format!(".{this_file}"))
+            .map(str::to_string)
+            .unwrap_or(stem);
+        let base = first.with_file_name(format!("{base_stem}.hdf5"));
+        let parts = part_paths(&base, num_files);
+        clear_particles(&mut snap);
+        for (k, part) in parts.iter().enumerate() {
+            let (s, n_files, idx) = read_one(part)?;
+            if n_files != num_files || idx != k {
+                bail!(
+                    "{}: part {idx} of {n_files}, expected part {k} of {num_files}",
+                    part.display()
+                );
+            }
+            append(&mut snap, s);
+        }
+    }
+    Ok(snap)
+}
+
+fn clear_particles(s: &mut Snapshot) {
+    for v in s.pos.iter_mut().chain(s.vel.iter_mut()) {
+        v.clear();
+    }
+    for v in [
+        &mut s.mass,
+        &mut s.h,
+        &mut s.rho,
+        &mut s.u,
+        &mut s.p,
+        &mut s.diss,
+    ] {
+        v.clear();
+    }
+    s.id.clear();
+    s.point_masses.clear();
+}
+
+fn append(into: &mut Snapshot, s: Snapshot) {
+    for a in 0..3 {
+        into.pos[a].extend(&s.pos[a]);
+        into.vel[a].extend(&s.vel[a]);
+    }
+    into.id.extend(s.id);
+    into.mass.extend(s.mass);
+    into.h.extend(s.h);
+    into.rho.extend(s.rho);
+    into.u.extend(s.u);
+    into.p.extend(s.p);
+    into.diss.extend(s.diss);
+    into.point_masses.extend(s.point_masses);
+}
+
+fn attr_f64(attrs: &HashMap<String, AttrValue>, key: &str) -> Option<f64> {
+    match attrs.get(key)? {
+        AttrValue::F64(x) => Some(*x),
+        AttrValue::F32(x) => Some(f64::from(*x)),
+        AttrValue::I32(x) => Some(f64::from(*x)),
+        AttrValue::I64(x) => Some(*x as f64),
+        AttrValue::U32(x) => Some(f64::from(*x)),
+        AttrValue::U64(x) => Some(*x as f64),
+        AttrValue::F64Array(v) if v.len() == 1 => Some(v[0]),
+        AttrValue::I32Array(v) if v.len() == 1 => Some(f64::from(v[0])),
+        _ => None,
+    }
+}
+
+fn attr_vec(attrs: &HashMap<String, AttrValue>, key: &str) -> Option<Vec<f64>> {
+    Some(match attrs.get(key)? {
+        AttrValue::F64Array(v) => v.clone(),
+        AttrValue::F32Array(v) => v.iter().map(|&x| f64::from(x)).collect(),
+        AttrValue::I32Array(v) => v.iter().map(|&x| f64::from(x)).collect(),
+        AttrValue::I64Array(v) => v.iter().map(|&x| x as f64).collect(),
+        AttrValue::U32Array(v) => v.iter().map(|&x| f64::from(x)).collect(),
+        AttrValue::U64Array(v) => v.iter().map(|&x| x as f64).collect(),
+        other => vec![attr_f64(
+            &HashMap::from([(key.to_string(), other.clone())]),
+            key,
+        )?],
+    })
+}
+
+/// Reads one file; returns the snapshot part, `NumFilesPerSnapshot` and this file's index.
+fn read_one(path: &Path) -> Result<(Snapshot, usize, usize)> {
+    let what = path.display();
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read snapshot {what}"))?;
+    let file = File::from_bytes(bytes)
+        .map_err(|e| anyhow::anyhow!("{what} is not a readable HDF5 file: {e}"))?;
+    let header = file
+        .group("Header")
+        .map_err(|_| anyhow::anyhow!("{what}: no /Header group (not a SWIFT or GADGET snapshot)"))?
+        .attrs()
+        .map_err(|e| anyhow::anyhow!("{what}: cannot read /Header attributes: {e}"))?;
+    let box_size = attr_vec(&header, "BoxSize").unwrap_or_else(|| vec![1.0]);
+    let box_size: Vec<f64> = (0..3)
+        .map(|a| box_size.get(a).copied().unwrap_or(box_size[0]))
+        .collect();
+    let shift = attr_vec(&header, "Shift").unwrap_or_else(|| vec![0.0; 3]);
+    let num_files = attr_f64(&header, "NumFilesPerSnapshot").unwrap_or(1.0) as usize;
+    let this_file = attr_f64(&header, "ThisFile").unwrap_or(0.0) as usize;
+    let mass_table = attr_vec(&header, "MassTable").unwrap_or_default();
+
+    let gas = file
+        .group("PartType0")
+        .map_err(|_| anyhow::anyhow!("{what}: no /PartType0 group (no gas particles)"))?;
+    let names = gas
+        .datasets()
+        .map_err(|e| anyhow::anyhow!("{what}: cannot list /PartType0: {e}"))?;
+    let find = |alts: &[&'static str]| -> Option<&'static str> {
+        alts.iter().find(|a| names.iter().any(|n| n == *a)).copied()
+    };
+    let read_f64 = |alts: &[&'static str]| -> Result<Option<Vec<f64>>> {
+        let Some(name) = find(alts) else {
+            return Ok(None);
+        };
+        let ds = gas
+            .dataset(name)
+            .map_err(|e| anyhow::anyhow!("{what}: /PartType0/{name}: {e}"))?;
+        Ok(Some(ds.read_f64().map_err(|e| {
+            anyhow::anyhow!("{what}: cannot read /PartType0/{name}: {e}")
+        })?))
+    };
+    let coords = read_f64(&["Coordinates"])?
+        .with_context(|| format!("{what}: /PartType0 has no Coordinates"))?;
+    // Coordinates are N×3 (SWIFT, GADGET); the unused ones of 1D and 2D runs are zero.
+    if coords.len() % 3 != 0 {
+        bail!("{what}: /PartType0/Coordinates is not N×3");
+    }
+    let n = coords.len() / 3;
+    let dimension = match attr_f64(&header, "Dimension") {
+        Some(d) => d as usize,
+        None => 3,
+    };
+    if !(1..=3).contains(&dimension) {
+        bail!("{what}: Header/Dimension is {dimension}, expected 1, 2 or 3");
+    }
+    let split = |v: &[f64]| -> [Vec<f64>; 3] {
+        std::array::from_fn(|a| (0..v.len() / 3).map(|i| v[3 * i + a]).collect())
+    };
+    let column = |alts: &[&'static str], label: &str| -> Result<Option<Vec<f64>>> {
+        let v = read_f64(alts)?;
+        if let Some(v) = &v
+            && v.len() != n
+        {
+            bail!("{what}: {label} has {} entries for {n} particles", v.len());
+        }
+        Ok(v)
+    };
+    let vel = match read_f64(&["Velocities", "Velocity"])? {
+        Some(v) if v.len() == 3 * n => split(&v),
+        Some(_) => bail!("{what}: /PartType0/Velocities is not N×3"),
+        None => std::array::from_fn(|_| vec![0.0; n]),
+    };
+    let mass = match column(&["Masses", "Mass"], "Masses")? {
+        Some(m) => m,
+        None => match mass_table.first() {
+            Some(&m) if m > 0.0 => vec![m; n],
+            _ => bail!("{what}: no /PartType0/Masses and no MassTable entry for gas"),
+        },
+    };
+    let ids = match find(&["ParticleIDs", "ParticleID"]) {
+        Some(name) => gas
+            .dataset(name)
+            .and_then(|d| d.read_u64())
+            .map_err(|e| anyhow::anyhow!("{what}: cannot read /PartType0/{name}: {e}"))?,
+        None => (0..n as u64).collect(),
+    };
+    if ids.len() != n {
+        bail!(
+            "{what}: ParticleIDs has {} entries for {n} particles",
+            ids.len()
+        );
+    }
+    let zeros = || vec![0.0; n];
+    let snap = Snapshot {
+        dimension,
+        time: attr_f64(&header, "Time").unwrap_or(0.0),
+        step: attr_f64(&header, "Step").unwrap_or(0.0) as u64,
+        box_lo: [0.0; 3],
+        box_hi: std::array::from_fn(|a| box_size[a]),
+        shift: std::array::from_fn(|a| shift.get(a).copied().unwrap_or(0.0)),
+        id: ids,
+        pos: split(&coords),
+        vel,
+        mass,
+        h: column(&["SmoothingLengths", "SmoothingLength"], "SmoothingLengths")?
+            .unwrap_or_else(zeros),
+        rho: column(&["Densities", "Density"], "Densities")?.unwrap_or_else(zeros),
+        u: column(&["InternalEnergies", "InternalEnergy"], "InternalEnergies")?
+            .unwrap_or_else(zeros),
+        p: column(&["Pressures", "Pressure"], "Pressures")?.unwrap_or_else(zeros),
+        diss: column(&["DissipationRates"], "DissipationRates")?.unwrap_or_else(zeros),
+        point_masses: read_point_masses(&file, path)?,
+    };
+    Ok((snap, num_files, this_file))
+}
+
+fn read_point_masses(file: &File, path: &Path) -> Result<Vec<PointMassRecord>> {
+    let Ok(g) = file.group(&format!("PartType{POINT_MASS_TYPE}")) else {
+        return Ok(Vec::new());
+    };
+    let what = path.display();
+    let read = |name: &str| -> Result<Vec<f64>> {
+        g.dataset(name).and_then(|d| d.read_f64()).map_err(|e| {
+            anyhow::anyhow!("{what}: cannot read /PartType{POINT_MASS_TYPE}/{name}: {e}")
+        })
+    };
+    let pos = read("Coordinates")?;
+    let vel = read("Velocities")?;
+    let mass = read("Masses")?;
+    let ids = g
+        .dataset("ParticleIDs")
+        .and_then(|d| d.read_u64())
+        .map_err(|e| anyhow::anyhow!("{what}: point-mass IDs: {e}"))?;
+    if pos.len() != 3 * mass.len() || vel.len() != pos.len() || ids.len() != mass.len() {
+        bail!("{what}: /PartType{POINT_MASS_TYPE} datasets disagree in length");
+    }
+    Ok((0..mass.len())
+        .map(|k| PointMassRecord {
+            id: ids[k],
+            pos: [pos[3 * k], pos[3 * k + 1], pos[3 * k + 2]],
+            vel: [vel[3 * k], vel[3 * k + 1], vel[3 * k + 2]],
+            mass: mass[k],
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    fn sample(n: usize, dimension: usize) -> Snapshot {
+        let mut rng = Rng::new(7);
+        let mut col = || (0..n).map(|_| rng.uniform()).collect::<Vec<f64>>();
+        Snapshot {
+            dimension,
+            time: 0.125,
+            step: 42,
+            box_lo: [0.0; 3],
+            box_hi: [2.0, 4.0, 1.0],
+            shift: [1.0, 2.0, 0.0],
+            id: (0..n as u64).map(|i| 3 * i + 5).collect(),
+            pos: [col(), col(), col()],
+            vel: [col(), col(), col()],
+            mass: col(),
+            h: col(),
+            rho: col(),
+            u: col(),
+            p: col(),
+            diss: col(),
+            point_masses: vec![PointMassRecord {
+                id: u64::MAX,
+                pos: [0.5, 0.25, 0.0],
+                vel: [0.0, 1.0, 0.0],
+                mass: 0.75,
+            }],
+        }
+    }
+
+    fn meta() -> RunMetadata {
+        RunMetadata {
+            parameters: BTreeMap::from([
+                ("eos.gamma".to_string(), "1.4".to_string()),
+                ("problem.kind".to_string(), "\"sod\"".to_string()),
+            ]),
+            units: Units {
+                mass_cgs: 2e33,
+                length_cgs: 7e10,
+                time_cgs: 1e3,
+            },
+            periodic: true,
+        }
+    }
+
+    #[test]
+    fn snapshot_round_trips_every_field_bit_for_bit() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("snap.hdf5");
+        let snap = sample(257, 3);
+        write_snapshot(&path, &snap, &meta(), 1).unwrap();
+        let back = read_snapshot(&path).unwrap();
+        assert_eq!(back, snap);
+    }
+
+    #[test]
+    fn multi_file_snapshot_reads_back_whole_from_any_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let base = dir.path().join("snap_0003.hdf5");
+        let snap = sample(100, 2);
+        let paths = write_snapshot(&base, &snap, &meta(), 3).unwrap();
+        assert_eq!(paths.len(), 3);
+        assert!(!base.exists(), "parts only, no single file");
+        assert_eq!(read_snapshot(&base).unwrap(), snap);
+        assert_eq!(read_snapshot(&paths[2]).unwrap(), snap);
+    }
+
+    #[test]
+    fn header_carries_swift_metadata() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("snap.hdf5");
+        write_snapshot(&path, &sample(10, 2), &meta(), 1).unwrap();
+        let f = File::open(&path).unwrap();
+        let h = f.group("Header").unwrap().attrs().unwrap();
+        assert_eq!(h["Code"], AttrValue::AsciiString("SWIFT".into()));
+        assert_eq!(attr_f64(&h, "Dimension"), Some(2.0));
+        assert_eq!(attr_vec(&h, "BoxSize").unwrap(), vec![2.0, 4.0, 1.0]);
+        let units = f.group("Units").unwrap().attrs().unwrap();
+        assert_eq!(attr_f64(&units, "Unit length in cgs (U_L)"), Some(7e10));
+        let params = f.group("Parameters").unwrap().attrs().unwrap();
+        assert_eq!(params["eos:gamma"], AttrValue::AsciiString("1.4".into()));
+        assert_eq!(params["problem:kind"], AttrValue::AsciiString("sod".into()));
+        // 2D density is a surface density: mass per length², in cgs 2e33 / 7e10².
+        let rho = f.dataset("PartType0/Densities").unwrap().attrs().unwrap();
+        assert_eq!(attr_f64(&rho, "U_L exponent"), Some(-2.0));
+        let c = attr_f64(
+            &rho,
+            "Conversion factor to CGS (not including cosmological corrections)",
+        )
+        .unwrap();
+        assert!((c / (2e33 / 4.9e21) - 1.0).abs() < 1e-12);
+        let coords = f.dataset("PartType0/Coordinates").unwrap();
+        assert_eq!(coords.shape().unwrap(), vec![10, 3]);
+    }
+
+    #[test]
+    fn truncated_foreign_and_missing_files_are_named_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = dir.path().join("snap.hdf5");
+        write_snapshot(&good, &sample(50, 3), &meta(), 1).unwrap();
+        let bytes = std::fs::read(&good).unwrap();
+        let cut = dir.path().join("cut.hdf5");
+        std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+        let e = format!("{:#}", read_snapshot(&cut).unwrap_err());
+        assert!(e.contains("cut.hdf5"), "{e}");
+
+        let text = dir.path().join("text.hdf5");
+        std::fs::write(&text, "id,x\n1,2\n").unwrap();
+        let e = format!("{:#}", read_snapshot(&text).unwrap_err());
+        assert!(e.contains("not a readable HDF5 file"), "{e}");
+
+        let mut fb = FileBuilder::new();
+        fb.create_dataset("temperature").with_f64_data(&[1.0]);
+        let foreign = dir.path().join("foreign.h5");
+        std::fs::write(&foreign, fb.finish().unwrap()).unwrap();
+        let e = format!("{:#}", read_snapshot(&foreign).unwrap_err());
+        assert!(e.contains("no /Header group"), "{e}");
+
+        let e = format!(
+            "{:#}",
+            read_snapshot(&dir.path().join("nope.hdf5")).unwrap_err()
+        );
+        assert!(e.contains("no such file"), "{e}");
+    }
+
+    #[test]
+    fn gadget_style_singular_names_and_mass_table_are_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("ics.hdf5");
+        let mut fb = FileBuilder::new();
+        let mut h = fb.create_group("Header");
+        h.set_attr("BoxSize", AttrValue::F64(2.0));
+        h.set_attr(
+            "MassTable",
+            AttrValue::F64Array(vec![0.5, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        );
+        h.set_attr(
+            "NumPart_ThisFile",
+            AttrValue::I32Array(vec![2, 0, 0, 0, 0, 0]),
+        );
+        fb.add_group(h.finish());
+        let mut g = fb.create_group("PartType0");
+        g.create_dataset("Coordinates")
+            .with_f32_data(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6])
+            .with_shape(&[2, 3]);
+        g.create_dataset("Velocity")
+            .with_f32_data(&[0.0; 6])
+            .with_shape(&[2, 3]);
+        g.create_dataset("InternalEnergy")
+            .with_f32_data(&[1.5, 2.5]);
+        g.create_dataset("ParticleIDs").with_u32_data(&[7, 9]);
+        fb.add_group(g.finish());
+        std::fs::write(&path, fb.finish().unwrap()).unwrap();
+        let s = read_snapshot(&path).unwrap();
+        assert_eq!(s.dimension, 3);
+        assert_eq!(s.mass, vec![0.5, 0.5]);
+        assert_eq!(s.id, vec![7, 9]);
+        assert_eq!(s.u, vec![1.5, 2.5]);
+        assert_eq!(s.box_hi, [2.0; 3]);
+        assert!((s.pos[1][1] - 0.5).abs() < 1e-7);
+    }
+}
