@@ -93,6 +93,12 @@ enum AnalyseCommand {
         /// The run's output folder.
         run: PathBuf,
     },
+    /// The shock tube: ρ, v, p, u against the exact Riemann solution at the final time
+    /// (sod.png, sod_profile.csv in the run folder).
+    Sod {
+        /// The run's output folder.
+        run: PathBuf,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -199,6 +205,14 @@ fn real_main(cli: Cli) -> Result<()> {
                 println!("tau = {tau:.4}: L1 of the averaged Σ = {:.2}%", 100.0 * l1);
             }
             for f in &report.files {
+                println!("wrote {}", f.display());
+            }
+            Ok(())
+        }
+        Command::Analyse {
+            what: AnalyseCommand::Sod { run },
+        } => {
+            for f in sphdisk::analysis::sod_report::analyse_sod(&run)? {
                 println!("wrote {}", f.display());
             }
             Ok(())

@@ -266,6 +266,9 @@ pub fn run_with_state<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create output folder {}", opts.out.display()))?;
     let mut log = RunLog::open(&opts.out)?;
+    // The problem file as run (overrides applied), for analyses and for reproducing the run.
+    let text = toml::to_string(cfg).context("cannot write the configuration")?;
+    write_atomic(&opts.out.join("run.toml"), text.as_bytes())?;
     let mut run = start_fresh::<D>(cfg, opts)?;
     log.line(&format!(
         "start {}: {} particles, {D}D, t_end = {}, {} threads",

@@ -6,6 +6,7 @@ pub mod riemann;
 pub mod ring;
 pub mod ring_report;
 pub mod sedov;
+pub mod sod_report;
 
 use crate::particles::Particles;
 

@@ -17,11 +17,11 @@ use crate::config::{Config, SodParams};
 use crate::particles::Particles;
 use crate::problems::{InitialState, lattice, make_box, smoothing_length};
 
-fn params(cfg: &Config) -> SodParams {
+pub(crate) fn params(cfg: &Config) -> SodParams {
     cfg.sod.clone().unwrap_or_default()
 }
 
-fn solution(cfg: &Config) -> Result<RiemannSolution> {
+pub(crate) fn solution(cfg: &Config) -> Result<RiemannSolution> {
     let s = params(cfg);
     let gamma = match cfg.eos {
         crate::physics::eos::Eos::Ideal { gamma } => gamma,
