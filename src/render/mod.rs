@@ -1,4 +1,9 @@
-//! Pictures: plots of profiles against exact solutions (PNG, no system libraries; the font
-//! is embedded). Particle images (column density, slices) will join here.
+//! Pictures, as PNG without system libraries (the font is embedded): plots of profiles
+//! against exact solutions (`plot`), and particle images — column density, projections and
+//! slices of SPH fields — built from a snapshot by kernel interpolation (`interpolate`),
+//! coloured (`colormap`) and drawn with axes and a colour bar (`image`).
 
+pub mod colormap;
+pub mod image;
+pub mod interpolate;
 pub mod plot;

@@ -42,7 +42,8 @@ pub const PALETTE: [RGBColor; 5] = [
     RGBColor(253, 231, 37),
 ];
 
-fn ensure_font() {
+/// Registers the embedded DejaVu Sans as "sans-serif", once per process.
+pub(crate) fn ensure_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The embedded font cannot be invalid; if it were, the first text would say so.
