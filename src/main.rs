@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 
 use sphdisk::config::Config;
+use sphdisk::render::image::{RenderOptions, render_png};
 use sphdisk::simulation::{Ended, RunOptions, default_out_dir, run};
 use sphdisk::sweep::Window;
 
@@ -51,6 +52,42 @@ enum Command {
         /// No progress bar and no report on the terminal (run.log has it all).
         #[arg(long)]
         quiet: bool,
+    },
+    /// Picture of a snapshot (SPH kernel interpolation onto pixels), or with a run folder
+    /// every snapshot of the run as movie frames with one colour scale.
+    Render {
+        /// A snapshot (`runs/X/snap_0003.hdf5`) or a run folder (`runs/X`).
+        input: PathBuf,
+        /// column-density, density, dissipation, temperature (u) or velocity.
+        #[arg(long, default_value = "column-density")]
+        quantity: String,
+        /// face-on, edge-on or slice.
+        #[arg(long, default_value = "face-on")]
+        view: String,
+        /// The PNG to write (a snapshot) or the folder of frames (a run folder). Default:
+        /// beside the input, named after the quantity and view.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// log or linear (default: log for densities, linear otherwise).
+        #[arg(long)]
+        scale: Option<String>,
+        /// viridis or magma.
+        #[arg(long)]
+        colormap: Option<String>,
+        /// Largest pixel count along each axis.
+        #[arg(long, default_value_t = 800)]
+        resolution: u32,
+        /// Fixed colour range `LO,HI` (default: from the data; one range for a whole movie).
+        #[arg(long, value_name = "LO,HI")]
+        range: Option<String>,
+        /// The horizontal and vertical extent shown, `LO,HI` each (default: the box).
+        #[arg(long, value_name = "LO,HI")]
+        xlim: Option<String>,
+        #[arg(long, value_name = "LO,HI")]
+        ylim: Option<String>,
+        /// Height of the slice plane (3D `--view slice`; default: the box middle).
+        #[arg(long)]
+        slice_z: Option<f64>,
     },
     /// Check a problem file (keys, values, initial particles) without running it.
     Check {
@@ -115,6 +152,18 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(2)
         }
+    }
+}
+
+/// `LO,HI` as two numbers, or an error naming the option.
+fn pair(option: &str, text: &str) -> Result<(f64, f64)> {
+    let parse = |s: &str| s.trim().parse::<f64>();
+    match text.split_once(',') {
+        Some((a, b)) => match (parse(a), parse(b)) {
+            (Ok(a), Ok(b)) => Ok((a, b)),
+            _ => anyhow::bail!("{option}: expected two numbers LO,HI, got `{text}`"),
+        },
+        None => anyhow::bail!("{option}: expected LO,HI, got `{text}`"),
     }
 }
 
@@ -214,6 +263,60 @@ fn real_main(cli: Cli) -> Result<()> {
         } => {
             for f in sphdisk::analysis::sod_report::analyse_sod(&run)? {
                 println!("wrote {}", f.display());
+            }
+            Ok(())
+        }
+        Command::Render {
+            input,
+            quantity,
+            view,
+            out,
+            scale,
+            colormap,
+            resolution,
+            range,
+            xlim,
+            ylim,
+            slice_z,
+        } => {
+            use sphdisk::render::interpolate::Extent;
+            let mut opts = RenderOptions::new(quantity.parse()?, view.parse()?);
+            if let Some(s) = scale {
+                opts.scale = s.parse()?;
+            }
+            if let Some(c) = colormap {
+                opts.colormap = c.parse()?;
+            }
+            opts.resolution = (resolution, resolution);
+            opts.range = range.as_deref().map(|r| pair("--range", r)).transpose()?;
+            opts.slice_z = slice_z;
+            match (xlim, ylim) {
+                (None, None) => {}
+                (Some(x), Some(y)) => {
+                    opts.frame = Some(Extent::new(pair("--xlim", &x)?, pair("--ylim", &y)?)?);
+                }
+                _ => anyhow::bail!("--xlim and --ylim go together"),
+            }
+            let name = format!("{}_{}", opts.quantity.name(), opts.view.name());
+            if input.is_dir() {
+                let out = out.unwrap_or_else(|| input.join(format!("frames_{name}")));
+                let frames = sphdisk::render::movie::render_run(&input, &opts, &out)?;
+                println!("wrote {} frames in {}", frames.len(), out.display());
+            } else {
+                let snap = sphdisk::io::hdf5::read_snapshot(&input)?.in_run_frame();
+                let out = out.unwrap_or_else(|| {
+                    let stem = input.file_stem().unwrap_or_default().to_string_lossy();
+                    input.with_file_name(format!("{stem}_{name}.png"))
+                });
+                let img = render_png(&snap, &opts, &out)?;
+                println!(
+                    "wrote {} ({} × {} pixels, colour range {:.4e} .. {:.4e})",
+                    out.display(),
+                    img.frame.nx,
+                    img.frame.ny,
+                    img.range_used.0,
+                    img.range_used.1
+                );
             }
             Ok(())
         }

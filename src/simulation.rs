@@ -215,9 +215,10 @@ impl<const D: usize> Run<D> {
             self.st.steps,
         );
         if let Some(g) = &self.phys.gravity {
+            // At the origin of the run's frame, in the file's frame like the gas.
             s.point_masses.push(PointMassRecord {
                 id: u64::MAX,
-                pos: [0.0; 3],
+                pos: s.shift,
                 vel: [0.0; 3],
                 mass: g.gm,
             });

@@ -125,4 +125,22 @@ impl Snapshot {
         p.diss.clone_from(&self.diss);
         Ok(p)
     }
+
+    /// The snapshot in the run's own frame (positions and box shifted back by `shift`), for
+    /// pictures whose axes should read as the problem file's coordinates.
+    pub fn in_run_frame(mut self) -> Self {
+        for a in 0..3 {
+            let s = self.shift[a];
+            if s != 0.0 {
+                self.pos[a].iter_mut().for_each(|x| *x -= s);
+                self.box_lo[a] -= s;
+                self.box_hi[a] -= s;
+                for pm in &mut self.point_masses {
+                    pm.pos[a] -= s;
+                }
+            }
+        }
+        self.shift = [0.0; 3];
+        self
+    }
 }

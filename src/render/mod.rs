@@ -6,4 +6,5 @@
 pub mod colormap;
 pub mod image;
 pub mod interpolate;
+pub mod movie;
 pub mod plot;
