@@ -313,13 +313,14 @@ pub fn clustered_cube(n: usize, seed: u64) -> [Vec<f64>; 3] {
         Vec::with_capacity(n),
         Vec::with_capacity(n),
     ];
-    for i in 0..n {
-        // Particle i belongs to the background for the first 40 % of each 20-particle cycle.
-        let k = i % 20;
-        let x: [f64; 3] = if k < 8 {
+    for _ in 0..n {
+        // Membership is drawn, not cycled: a cycle would alias with the strided sample that
+        // `support_for_neighbours` measures on.
+        let u = rng.uniform();
+        let x: [f64; 3] = if u < 0.4 {
             std::array::from_fn(|_| rng.uniform())
         } else {
-            let (centre, clump) = &clumps[(k - 8) / 3];
+            let (centre, clump) = &clumps[(((u - 0.4) / 0.15) as usize).min(3)];
             loop {
                 let off: [f64; 3] = match clump {
                     Clump::Gauss(sigma) => std::array::from_fn(|_| sigma * rng.normal()),
@@ -600,6 +601,16 @@ mod tests {
         let c = neighbour_counts(&disk, s);
         let mean = c.iter().map(|&c| c as f64).sum::<f64>() / 5000.0;
         assert!((mean - 20.0).abs() < 2.0, "{mean}");
+    }
+
+    #[test]
+    fn support_calibration_is_unbiased_on_the_clustered_box() {
+        // 100 000 particles: the calibration samples every 5th one.
+        let cube = clustered_cube(100_000, 2);
+        let s = support_for_neighbours(&cube, 50.0);
+        let c = neighbour_counts(&cube, s);
+        let mean = c.iter().map(|&c| c as f64).sum::<f64>() / 100_000.0;
+        assert!((mean - 50.0).abs() < 5.0, "{mean}");
     }
 
     #[test]
