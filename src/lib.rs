@@ -7,6 +7,7 @@ pub mod analysis;
 pub mod bench;
 pub mod boundary;
 pub mod config;
+pub mod domain;
 pub mod grid;
 pub mod integrate;
 pub mod io;

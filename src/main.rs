@@ -1,4 +1,5 @@
-//! The `sphdisk` command: `run` a problem file, `bench` the sweep.
+//! The `sphdisk` command: `run` a problem file, `bench` the sweep, `decompose` (the domain
+//! decomposition's balance and ghosts).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -116,6 +117,22 @@ enum Command {
         /// `sweep` (the paper's window) or `full` (keep the whole pair list).
         #[arg(long, value_enum, default_value_t = WindowArg::Sweep)]
         window: WindowArg,
+        /// Print JSON lines instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Load imbalance and ghost fraction of the k-d domain decomposition on a 2D disk and a
+    /// 3D clustered box, without running a simulation.
+    Decompose {
+        /// Region (rank) counts (repeatable).
+        #[arg(long = "regions", default_values_t = [15usize, 32, 64, 1000])]
+        regions: Vec<usize>,
+        /// Particles in the 2D disk (0: skip).
+        #[arg(long, default_value_t = 200_000)]
+        disk_particles: usize,
+        /// Particles in the 3D clustered box (0: skip).
+        #[arg(long, default_value_t = 500_000)]
+        cluster_particles: usize,
         /// Print JSON lines instead of a table.
         #[arg(long)]
         json: bool,
@@ -395,6 +412,20 @@ fn real_main(cli: Cli) -> Result<()> {
                 }
             }
             Ok(())
+        }
+        Command::Decompose {
+            regions,
+            disk_particles,
+            cluster_particles,
+            json,
+        } => {
+            let opts = sphdisk::domain::report::ReportOptions {
+                regions,
+                disk_particles,
+                cluster_particles,
+                json,
+            };
+            sphdisk::domain::report::run_report(&opts).map(|_| ())
         }
     }
 }
