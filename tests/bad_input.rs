@@ -2,27 +2,14 @@
 //! exit code and one clear line on stderr naming the key or value at fault — never a panic.
 
 use std::path::Path;
-use std::process::Command;
+
+mod common;
+use common::problem_file as problem;
 
 /// Runs `sphdisk` with `args` in `dir`; returns (exit code, stderr).
 fn sphdisk(dir: &Path, args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_sphdisk"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("sphdisk starts");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn problem(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("problems")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
+    let (code, _, err) = common::sphdisk_cli(Some(dir), args);
+    (code, err)
 }
 
 /// Asserts a clean failure whose single line mentions every word in `expect`.

@@ -2,26 +2,12 @@
 //! per snapshot, and clear one-line errors for what cannot be drawn.
 
 use std::path::Path;
-use std::process::Command;
+
+mod common;
+use common::problem_file as problem;
 
 fn sphdisk(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_sphdisk"))
-        .args(args)
-        .output()
-        .expect("sphdisk starts");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn problem(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("problems")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
+    common::sphdisk_cli(None, args)
 }
 
 fn is_png(path: &Path) -> bool {

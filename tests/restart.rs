@@ -10,24 +10,13 @@ use std::time::{Duration, Instant};
 use sphdisk::io::checkpoint;
 use sphdisk::io::hdf5::read_snapshot;
 
-fn problem(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("problems")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
+mod common;
+use common::problem_file as problem;
 
 /// Runs `sphdisk` with `args`; returns (exit code, stderr).
 fn sphdisk(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_sphdisk"))
-        .args(args)
-        .output()
-        .expect("sphdisk starts");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let (code, _, err) = common::sphdisk_cli(None, args);
+    (code, err)
 }
 
 fn ok(args: &[&str]) {

@@ -14,6 +14,7 @@ pub struct Run<const D: usize> {
     pub dir: tempfile::TempDir,
 }
 
+#[allow(dead_code)]
 pub fn run_problem<const D: usize>(file: &str, sets: &[&str]) -> Run<D> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("problems")
@@ -36,4 +37,31 @@ pub fn error(s: &Summary, key: &str) -> f64 {
     *s.errors
         .get(key)
         .unwrap_or_else(|| panic!("summary has no errors.{key}: {:?}", s.errors))
+}
+
+/// The path of a problem file in `problems/`, as a string for command lines.
+#[allow(dead_code)]
+pub fn problem_file(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("problems")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// Runs the `sphdisk` binary with `args` (in `dir` if given); returns (exit code, stdout,
+/// stderr).
+#[allow(dead_code)]
+pub fn sphdisk_cli(dir: Option<&Path>, args: &[&str]) -> (i32, String, String) {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_sphdisk"));
+    cmd.args(args);
+    if let Some(d) = dir {
+        cmd.current_dir(d);
+    }
+    let out = cmd.output().expect("sphdisk starts");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
