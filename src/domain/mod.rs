@@ -14,8 +14,12 @@
 //!   clustered box.
 
 pub mod balance;
+pub mod comm;
 pub mod decomposition;
+pub mod exchange;
 pub mod ghosts;
+#[cfg(feature = "mpi")]
+pub mod mpi_comm;
 pub mod report;
 
 pub use balance::{LoadMeasure, LoadStats};

@@ -34,6 +34,133 @@ impl<const D: usize> Default for Work<D> {
     }
 }
 
+/// Pair classes of a local particle: a pair is evaluated unless both partners share a class
+/// bit (`IMAGE`: both are boundary images; `AWAY`: both lie in other ranks' regions) or
+/// either is `NO_PAIR`.
+pub mod class {
+    /// A boundary image (periodic or mirror ghost).
+    pub const IMAGE: u8 = 1;
+    /// Lies in a higher rank's region (a rank ghost, paper 2.3): pairs only with particles
+    /// of this rank's region.
+    pub const AWAY: u8 = 2;
+    /// Lies in a lower rank's region: every pair of it is evaluated there.
+    pub const NO_PAIR: u8 = 4;
+
+    #[inline]
+    pub fn pairs(a: u8, b: u8) -> bool {
+        (a & b) == 0 && ((a | b) & NO_PAIR) == 0
+    }
+}
+
+/// No local owner: the particle is a copy of another rank's particle.
+pub const REMOTE: u32 = u32::MAX;
+
+/// The particles one evaluation works on, in any order, before sorting by cell: the reals
+/// of the [`Particles`] store (`src[k] = k` for the first `n_real`), their boundary images,
+/// and (distributed runs) copies of other ranks' particles.
+#[derive(Clone, Debug)]
+pub struct Elements<const D: usize> {
+    pub pos: [Vec<f64>; D],
+    /// Already multiplied by `sign`.
+    pub vel: [Vec<f64>; D],
+    pub mass: Vec<f64>,
+    pub u: Vec<f64>,
+    pub sign: Vec<[f64; D]>,
+    pub fold: Vec<bool>,
+    pub class: Vec<u8>,
+    /// Index in the store of the real particle this is (or is an image of); [`REMOTE`] for
+    /// another rank's particle.
+    pub src: Vec<u32>,
+    /// The first `n_real` elements are the store's reals, in store order.
+    pub n_real: usize,
+}
+
+impl<const D: usize> Default for Elements<D> {
+    fn default() -> Self {
+        Self {
+            pos: std::array::from_fn(|_| Vec::new()),
+            vel: std::array::from_fn(|_| Vec::new()),
+            mass: Vec::new(),
+            u: Vec::new(),
+            sign: Vec::new(),
+            fold: Vec::new(),
+            class: Vec::new(),
+            src: Vec::new(),
+            n_real: 0,
+        }
+    }
+}
+
+impl<const D: usize> Elements<D> {
+    /// The reals of `parts` (pair class `class_of(i)`) and their boundary images.
+    pub fn reals_and_images(
+        parts: &Particles<D>,
+        bx: &SimBox<D>,
+        support: f64,
+        class_of: impl Fn(usize) -> u8,
+    ) -> Self {
+        let n = parts.len();
+        let ghosts: Vec<Ghost<D>> = make_ghosts(bx, &parts.pos, support);
+        let mut e = Self {
+            pos: std::array::from_fn(|d| parts.pos[d].clone()),
+            vel: std::array::from_fn(|d| parts.vel[d].clone()),
+            mass: parts.mass.clone(),
+            u: parts.u.clone(),
+            sign: vec![[1.0; D]; n],
+            fold: vec![false; n],
+            class: (0..n).map(&class_of).collect(),
+            src: (0..n as u32).collect(),
+            n_real: n,
+        };
+        for g in &ghosts {
+            let o = g.owner as usize;
+            e.push(
+                g.pos,
+                std::array::from_fn(|d| parts.vel[d][o] * g.sign[d]),
+                parts.mass[o],
+                parts.u[o],
+                g.sign,
+                g.fold,
+                class::IMAGE,
+                g.owner,
+            );
+        }
+        e
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub fn push(
+        &mut self,
+        pos: [f64; D],
+        vel: [f64; D],
+        mass: f64,
+        u: f64,
+        sign: [f64; D],
+        fold: bool,
+        class: u8,
+        src: u32,
+    ) {
+        for d in 0..D {
+            self.pos[d].push(pos[d]);
+            self.vel[d].push(vel[d]);
+        }
+        self.mass.push(mass);
+        self.u.push(u);
+        self.sign.push(sign);
+        self.fold.push(fold);
+        self.class.push(class);
+        self.src.push(src);
+    }
+
+    pub fn len(&self) -> usize {
+        self.mass.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.mass.is_empty()
+    }
+}
+
 /// Real particles and ghosts of one evaluation, sorted by cell.
 pub struct Local<const D: usize> {
     pub grid: Grid<D>,
@@ -41,12 +168,18 @@ pub struct Local<const D: usize> {
     pub cell_start: Vec<u32>,
     /// Cell index of each local particle.
     pub cell: Vec<u32>,
-    /// Index of the real particle (for a ghost: its owner) in the [`Particles`] store.
+    /// Index of the real particle (for a ghost: its owner) in the [`Particles`] store;
+    /// [`REMOTE`] for another rank's particle.
     pub src: Vec<u32>,
-    /// Local index of the owner (itself for a real particle).
+    /// Local index of the owner (itself for a real particle; [`REMOTE`] for another rank's).
     pub owner: Vec<u32>,
+    /// Everything but this rank's reals: boundary images and other ranks' particles.
     pub is_ghost: Vec<bool>,
     pub fold: Vec<bool>,
+    /// Pair class bits ([`class`]).
+    pub class: Vec<u8>,
+    /// Position of each local particle in the [`Elements`] it was built from.
+    pub element: Vec<u32>,
     /// ±1 per axis: a ghost's vectors are its owner's times `sign`.
     pub sign: Vec<[f64; D]>,
     pub pos: [Vec<f64>; D],
@@ -67,15 +200,15 @@ pub struct Local<const D: usize> {
 impl<const D: usize> Local<D> {
     /// Makes the ghosts, builds the grid over reals and ghosts, and copies both in cell order.
     pub fn build(parts: &Particles<D>, bx: &SimBox<D>, support: f64) -> Self {
-        let n = parts.len();
-        let ghosts: Vec<Ghost<D>> = make_ghosts(bx, &parts.pos, support);
-        let all_pos: [Vec<f64>; D] = std::array::from_fn(|d| {
-            let mut v = parts.pos[d].clone();
-            v.extend(ghosts.iter().map(|g| g.pos[d]));
-            v
-        });
-        let grid = Grid::new(bx, support, &all_pos);
-        let (order, cell_start) = grid.sort(&all_pos);
+        let e = Elements::reals_and_images(parts, bx, support, |_| 0);
+        let grid = Grid::new(bx, support, &e.pos);
+        Self::from_elements(e, grid)
+    }
+
+    /// Sorts `e` into the cells of `grid`.
+    pub fn from_elements(e: Elements<D>, grid: Grid<D>) -> Self {
+        let n = e.n_real;
+        let (order, cell_start) = grid.sort(&e.pos);
         let total = order.len();
         let mut local_of_real = vec![0u32; n];
         let mut cell = vec![0u32; total];
@@ -84,49 +217,38 @@ impl<const D: usize> Local<D> {
                 cell[k as usize] = c as u32;
             }
         }
-        let mut src = Vec::with_capacity(total);
-        let mut is_ghost = Vec::with_capacity(total);
-        let mut fold = Vec::with_capacity(total);
-        let mut sign = Vec::with_capacity(total);
         for (k, &o) in order.iter().enumerate() {
-            let o = o as usize;
-            if o < n {
-                local_of_real[o] = k as u32;
-                src.push(o as u32);
-                is_ghost.push(false);
-                fold.push(false);
-                sign.push([1.0; D]);
-            } else {
-                let g = &ghosts[o - n];
-                src.push(g.owner);
-                is_ghost.push(true);
-                fold.push(g.fold);
-                sign.push(g.sign);
+            if (o as usize) < n {
+                local_of_real[o as usize] = k as u32;
             }
         }
-        let owner: Vec<u32> = src.iter().map(|&s| local_of_real[s as usize]).collect();
-        let pos = std::array::from_fn(|d| order.iter().map(|&o| all_pos[d][o as usize]).collect());
-        let vel = std::array::from_fn(|d| {
-            src.iter()
-                .zip(&sign)
-                .map(|(&s, sg)| parts.vel[d][s as usize] * sg[d])
-                .collect()
-        });
-        let mass = src.iter().map(|&s| parts.mass[s as usize]).collect();
-        let u = src.iter().map(|&s| parts.u[s as usize]).collect();
+        let pick = |v: &[f64]| -> Vec<f64> { order.iter().map(|&o| v[o as usize]).collect() };
+        let src: Vec<u32> = order.iter().map(|&o| e.src[o as usize]).collect();
+        let owner = src
+            .iter()
+            .map(|&s| {
+                if s == REMOTE {
+                    REMOTE
+                } else {
+                    local_of_real[s as usize]
+                }
+            })
+            .collect();
         Self {
             grid,
             cell_start,
             cell,
-            src,
             owner,
-            is_ghost,
-            fold,
-            sign,
-            pos,
-            vel,
-            mass,
-            u,
+            is_ghost: order.iter().map(|&o| o as usize >= n).collect(),
+            fold: order.iter().map(|&o| e.fold[o as usize]).collect(),
+            class: order.iter().map(|&o| e.class[o as usize]).collect(),
+            sign: order.iter().map(|&o| e.sign[o as usize]).collect(),
+            pos: std::array::from_fn(|d| pick(&e.pos[d])),
+            vel: std::array::from_fn(|d| pick(&e.vel[d])),
+            mass: pick(&e.mass),
+            u: pick(&e.u),
+            src,
+            element: order,
             rho: vec![0.0; total],
             p: vec![0.0; total],
             cs: vec![0.0; total],

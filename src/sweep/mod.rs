@@ -77,6 +77,8 @@ pub struct StageTimes {
     pub force: f64,
     /// Folding ghosts, equation of state, copies to ghosts, write-back.
     pub finish: f64,
+    /// Waiting for other ranks' messages (distributed runs).
+    pub wait: f64,
 }
 
 impl StageTimes {
@@ -87,6 +89,7 @@ impl StageTimes {
         self.gradient += o.gradient;
         self.force += o.force;
         self.finish += o.finish;
+        self.wait += o.wait;
     }
 
     /// Every part multiplied by `k` (e.g. totals to per-step means).
@@ -98,6 +101,7 @@ impl StageTimes {
             gradient: self.gradient * k,
             force: self.force * k,
             finish: self.finish * k,
+            wait: self.wait * k,
         }
     }
 }
@@ -113,9 +117,9 @@ pub enum Window {
 }
 
 /// The three sums, in order. A stage number counts the sums finished.
-const DENSITY: u8 = 1;
-const GRADIENT: u8 = 2;
-const FORCE: u8 = 3;
+pub const DENSITY: u8 = 1;
+pub const GRADIENT: u8 = 2;
+pub const FORCE: u8 = 3;
 
 /// Dependency tables of the slabs, from where ghosts lie relative to their owners.
 struct Dependencies {
@@ -136,7 +140,7 @@ impl Dependencies {
             ghosts_of: vec![Vec::new(); ns],
         };
         for k in 0..local.len() {
-            if !local.is_ghost[k] {
+            if !local.is_ghost[k] || local.owner[k] == local::REMOTE {
                 continue;
             }
             let (sg, so) = (local.slab_of(k), local.slab_of(local.owner[k] as usize));
@@ -154,6 +158,52 @@ impl Dependencies {
     }
 }
 
+/// What a distributed evaluation adds to the sweep (paper, Section 2.3): other ranks'
+/// contributions to this rank's particles, and the values of the copies of other ranks'
+/// particles, which change "when a particle changes its state". The single-process sweep
+/// uses [`NoExchange`].
+pub trait Exchange<const D: usize> {
+    /// Whether slab `t` may finish stage `stage` now (its particles' values are complete).
+    fn may_finish(&self, t: usize, stage: u8) -> bool;
+    /// Sends what has become ready and takes in what has arrived, without waiting; true if
+    /// that changed anything the sweep waits for.
+    fn poll(&mut self, st: &mut SweepState<'_, D>) -> bool;
+    /// Waits for the next message the sweep needs; called only when no local work is left.
+    fn wait(&mut self, st: &mut SweepState<'_, D>);
+}
+
+/// The sweep's state as an [`Exchange`] sees it.
+pub struct SweepState<'a, const D: usize> {
+    pub local: &'a mut Local<D>,
+    pub work: &'a mut [Work<D>],
+    /// Sums finished per slab (the slab's particles' state).
+    pub slab_stage: &'a [u8],
+    /// Sums done per pair block.
+    pub pair_stage: &'a [u8],
+}
+
+impl<const D: usize> SweepState<'_, D> {
+    /// Whether every pair of slab `t`'s particles has had sum `k` (blocks `t` and `t + 1`).
+    pub fn pairs_done(&self, t: usize, k: u8) -> bool {
+        self.pair_stage[t] >= k && (t + 1 >= self.pair_stage.len() || self.pair_stage[t + 1] >= k)
+    }
+}
+
+/// No other ranks.
+pub struct NoExchange;
+
+impl<const D: usize> Exchange<D> for NoExchange {
+    fn may_finish(&self, _: usize, _: u8) -> bool {
+        true
+    }
+    fn poll(&mut self, _: &mut SweepState<'_, D>) -> bool {
+        false
+    }
+    fn wait(&mut self, _: &mut SweepState<'_, D>) {
+        unreachable!("the single-process sweep never waits")
+    }
+}
+
 /// Evaluates density, velocity gradient, accelerations and du/dt of every real particle by
 /// one sweep, writing them into `parts`.
 pub fn evaluate<const D: usize>(
@@ -164,6 +214,25 @@ pub fn evaluate<const D: usize>(
 ) -> SweepStats {
     let clock = Instant::now();
     let mut local = Local::build(parts, bx, phys.kernel.support());
+    let build = clock.elapsed().as_secs_f64();
+    let (work, mut stats) = sweep(&mut local, phys, window, &mut NoExchange);
+    stats.times.build += build;
+    let c = Instant::now();
+    write_back(parts, &local, &work);
+    stats.times.finish += c.elapsed().as_secs_f64();
+    stats
+}
+
+/// The sweep over a built working set: the three sums slab by slab (module documentation),
+/// with `ex` supplying what other ranks contribute. Returns the accumulators.
+pub fn sweep<const D: usize>(
+    local: &mut Local<D>,
+    phys: &Physics<D>,
+    window: Window,
+    ex: &mut dyn Exchange<D>,
+) -> (Vec<Work<D>>, SweepStats) {
+    let clock = Instant::now();
+    let local = local;
     let mut work = vec![Work::<D>::default(); local.len()];
     let deps = Dependencies::new(&local);
     let ns = local.num_slabs();
@@ -192,10 +261,10 @@ pub fn evaluate<const D: usize>(
     for s in 0..=ns {
         if s < ns {
             let c = Instant::now();
-            let block = PairBlock::find(&local, &phys.kernel, s);
+            let block = PairBlock::find(local, &phys.kernel, s);
             lap(&mut times.find_pairs, c);
             let c = Instant::now();
-            block.density(&local, &mut work);
+            block.density(local, &mut work);
             lap(&mut times.density, c);
             stats.pairs += block.len() as u64;
             live_pairs += block.len();
@@ -216,10 +285,11 @@ pub fn evaluate<const D: usize>(
                     && deps.ghost_slabs[t]
                         .iter()
                         .all(|&g| pairs_done(&pair_stage, g, next))
-                    && deps.owner_slabs[t].iter().all(|&o| slab_stage[o] >= next);
+                    && deps.owner_slabs[t].iter().all(|&o| slab_stage[o] >= next)
+                    && ex.may_finish(t, next);
                 if ready {
                     let c = Instant::now();
-                    finish_slab(&mut local, &mut work, &deps, phys, t, next);
+                    finish_slab(local, &mut work, &deps, phys, t, next);
                     lap(&mut times.finish, c);
                     slab_stage[t] = next;
                     progress = true;
@@ -237,10 +307,10 @@ pub fn evaluate<const D: usize>(
                 let block = blocks[t].as_ref().expect("live block");
                 let c = Instant::now();
                 if next == GRADIENT {
-                    block.gradient(&local, &mut work);
+                    block.gradient(local, &mut work);
                     lap(&mut times.gradient, c);
                 } else {
-                    block.force(&local, phys, &mut work);
+                    block.force(local, phys, &mut work);
                     lap(&mut times.force, c);
                     if window == Window::Sweep {
                         live_pairs -= block.len();
@@ -250,8 +320,24 @@ pub fn evaluate<const D: usize>(
                 pair_stage[t] = next;
                 progress = true;
             }
+            let mut st = SweepState {
+                local,
+                work: &mut work,
+                slab_stage: &slab_stage,
+                pair_stage: &pair_stage,
+            };
+            if ex.poll(&mut st) {
+                progress = true;
+            }
             pending.retain(|&t| slab_stage[t] < FORCE || pair_stage[t] < FORCE);
             if !progress {
+                // Nothing local left to do: wait for other ranks, or go on to the next slab.
+                if s == ns && !pending.is_empty() {
+                    let c = Instant::now();
+                    ex.wait(&mut st);
+                    lap(&mut times.wait, c);
+                    continue;
+                }
                 break;
             }
         }
@@ -261,11 +347,8 @@ pub fn evaluate<const D: usize>(
         "sweep left slabs unfinished: a dependency cycle"
     );
     stats.peak_window_bytes = stats.peak_pairs * BYTES_PER_PAIR;
-    let c = Instant::now();
-    write_back(parts, &local, &work);
-    lap(&mut times.finish, c);
     stats.times = times;
-    stats
+    (work, stats)
 }
 
 /// A slab has finished stage `stage` for all its particles: fold the periodic ghosts' part
@@ -363,7 +446,8 @@ fn finish_slab<const D: usize>(
     }
 }
 
-fn write_back<const D: usize>(parts: &mut Particles<D>, local: &Local<D>, work: &[Work<D>]) {
+/// Copies the finished quantities of this rank's reals from the working set into `parts`.
+pub fn write_back<const D: usize>(parts: &mut Particles<D>, local: &Local<D>, work: &[Work<D>]) {
     for k in 0..local.len() {
         if local.is_ghost[k] {
             continue;

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::kernel::Kernel;
 use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
 use crate::sweep::Physics;
-use crate::sweep::local::{Local, Work};
+use crate::sweep::local::{Local, Work, class};
 
 /// An interacting pair with its kernel values, computed once and reused by all three sums.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -119,7 +119,8 @@ impl<const D: usize> Accumulator for ForceSum<D> {
 impl PairBlock {
     /// Finds every pair with first partner in slab `slab` and the second in the same cell
     /// (lower index), a lower neighbour cell of the same slab, or the previous slab.
-    /// Ghost–ghost pairs are skipped: they stand for pairs that are evaluated between reals.
+    /// Pairs of two ghosts are skipped ([`class::pairs`]): they stand for pairs evaluated
+    /// between reals, or on another rank.
     pub fn find<const D: usize>(local: &Local<D>, kernel: &Kernel<D>, slab: usize) -> Self {
         let range = local.slab_range(slab);
         let (i_start, i_end) = (range.start, range.end);
@@ -172,19 +173,19 @@ impl PairBlock {
                         }
                     }
                     let xi: [f64; D] = std::array::from_fn(|d| pos[d][i]);
-                    let gi = local.is_ghost[i];
+                    let ci = local.class[i];
                     let own = (local.cell_start[c] as usize, i);
                     for &(a, b) in std::iter::once(&own).chain(ranges.iter()) {
                         let len = b - a;
                         let xs: [&[f64]; D] = std::array::from_fn(|d| &pos[d][a..b]);
-                        let ghosts = &local.is_ghost[a..b];
+                        let classes = &local.class[a..b];
                         for k in 0..len {
                             let mut r2 = 0.0;
                             for d in 0..D {
                                 let dx = xi[d] - xs[d][k];
                                 r2 += dx * dx;
                             }
-                            if r2 < support2 && !(gi && ghosts[k]) {
+                            if r2 < support2 && class::pairs(ci, classes[k]) {
                                 let r = r2.sqrt();
                                 let (w, f) = kernel.w_and_f(r);
                                 pairs.push(Pair {

@@ -8,7 +8,7 @@ use crate::physics::artificial_viscosity::balsara_factor;
 use crate::physics::eos::cylindrical_radius;
 use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
 use crate::sweep::Physics;
-use crate::sweep::local::Local;
+use crate::sweep::local::{self, Local};
 
 /// Every (i, j), j < i, of the local set (reals and ghosts, no ghost–ghost pair) closer than
 /// the support, by testing all N² pairs.
@@ -16,7 +16,7 @@ pub fn brute_force_pairs<const D: usize>(local: &Local<D>, support: f64) -> Vec<
     let mut out = Vec::new();
     for i in 0..local.len() {
         for j in 0..i {
-            if local.is_ghost[i] && local.is_ghost[j] {
+            if !local::class::pairs(local.class[i], local.class[j]) {
                 continue;
             }
             let r2: f64 = (0..D)
