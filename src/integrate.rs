@@ -45,6 +45,12 @@ pub fn rhs<const D: usize>(
     window: Window,
 ) -> SweepStats {
     let stats = evaluate(p, bx, phys, window);
+    add_gravity(p, phys);
+    stats
+}
+
+/// Adds the central point mass's acceleration, if there is one.
+pub fn add_gravity<const D: usize>(p: &mut Particles<D>, phys: &Physics<D>) {
     if let Some(g) = &phys.gravity {
         for i in 0..p.len() {
             let a = g.acceleration(&p.position(i));
@@ -53,7 +59,6 @@ pub fn rhs<const D: usize>(
             }
         }
     }
-    stats
 }
 
 /// v ← v_half + a Δt/2 and, if the energy is evolved, u ← u_half + (du/dt) Δt/2.
@@ -112,6 +117,17 @@ pub fn kdk_step<const D: usize>(
     window: Window,
     dt: f64,
 ) -> SweepStats {
+    kdk_step_with(p, bx, phys, dt, |p| rhs(p, bx, phys, window))
+}
+
+/// [`kdk_step`] with the right-hand sides from `rhs` (e.g. a distributed evaluation).
+pub fn kdk_step_with<const D: usize>(
+    p: &mut Particles<D>,
+    bx: &SimBox<D>,
+    phys: &Physics<D>,
+    dt: f64,
+    rhs: impl FnOnce(&mut Particles<D>) -> SweepStats,
+) -> SweepStats {
     let evolve_u = phys.eos.evolves_energy();
     let half = 0.5 * dt;
     let n = p.len();
@@ -132,7 +148,7 @@ pub fn kdk_step<const D: usize>(
     bx.enforce(&mut p.pos, &mut v_half);
     // Predict with the old accelerations, evaluate, correct with the new ones.
     half_kick(p, &v_half, &u_half, half, evolve_u);
-    let stats = rhs(p, bx, phys, window);
+    let stats = rhs(p);
     half_kick(p, &v_half, &u_half, half, evolve_u);
     if evolve_u {
         // Pressure and sound speed from the corrected energy (density is unchanged).

@@ -187,6 +187,8 @@ fn pair(option: &str, text: &str) -> Result<(f64, f64)> {
 /// The terminal report of a run.
 fn report_run(ended: &Ended, out: &std::path::Path) {
     match ended {
+        // Other ranks of a distributed run: rank 0 reports.
+        Ended::Helped => return,
         Ended::Finished(s) => {
             eprintln!(
                 "{}: {} particles, {}D, {} steps to t = {} in {:.2} s ({:.3e} particle updates/s, {} threads)",
@@ -218,6 +220,51 @@ fn report_run(ended: &Ended, out: &std::path::Path) {
     eprintln!("  outputs in {}", out.display());
 }
 
+/// What `sphdisk run` was asked to do.
+enum Job {
+    Fresh(Box<Config>, RunOptions),
+    Resume(Vec<String>, RunOptions),
+}
+
+/// Runs the job on this process, or, when started by `mpirun` with more than one rank (and
+/// built with `--features mpi`), on all ranks together.
+fn execute(job: Job) -> Result<Ended> {
+    #[cfg(feature = "mpi")]
+    if let Some(ended) = execute_mpi(&job) {
+        return ended;
+    }
+    match job {
+        Job::Fresh(cfg, opts) => run(&cfg, &opts),
+        Job::Resume(sets, opts) => sphdisk::simulation::resume(&sets, &opts),
+    }
+}
+
+/// The job on the MPI ranks; None when there is only one rank (run as usual). A rank that
+/// fails ends the whole job with `MPI_Abort` and its message, so that none waits forever.
+#[cfg(feature = "mpi")]
+fn execute_mpi(job: &Job) -> Option<Result<Ended>> {
+    use sphdisk::domain::comm::Comm;
+    use sphdisk::domain::mpi_comm::{MpiComm, install_abort_on_panic};
+    let universe = mpi::initialize()?;
+    let world = mpi::topology::Communicator::duplicate(&universe.world());
+    if mpi::topology::Communicator::size(&world) < 2 {
+        return None;
+    }
+    let mut comm = MpiComm::new(world);
+    install_abort_on_panic(comm.rank());
+    let ended = match job {
+        Job::Fresh(cfg, opts) => sphdisk::domain::team::run(&mut comm, cfg, opts),
+        Job::Resume(sets, opts) => sphdisk::domain::team::resume(&mut comm, sets, opts),
+    };
+    match ended {
+        Ok(ended) => {
+            comm.flush();
+            Some(Ok(ended))
+        }
+        Err(e) => comm.abort(&format!("{e:#}")),
+    }
+}
+
 fn real_main(cli: Cli) -> Result<()> {
     if let Some(t) = cli.threads {
         rayon::ThreadPoolBuilder::new()
@@ -235,7 +282,7 @@ fn real_main(cli: Cli) -> Result<()> {
             stop_after,
             quiet,
         } => {
-            let (ended, out) = match (resume, problem) {
+            let (job, out) = match (resume, problem) {
                 (Some(dir), _) => {
                     let opts = RunOptions {
                         out: dir.clone(),
@@ -243,7 +290,7 @@ fn real_main(cli: Cli) -> Result<()> {
                         from: None,
                         stop_after,
                     };
-                    (sphdisk::simulation::resume(&sets, &opts)?, dir)
+                    (Job::Resume(sets, opts), dir)
                 }
                 (None, Some(problem)) => {
                     let cfg = Config::load(&problem, &sets)?;
@@ -254,10 +301,11 @@ fn real_main(cli: Cli) -> Result<()> {
                         from,
                         stop_after,
                     };
-                    (run(&cfg, &opts)?, out)
+                    (Job::Fresh(Box::new(cfg), opts), out)
                 }
                 (None, None) => anyhow::bail!("give a problem file or --resume RUN_FOLDER"),
             };
+            let ended = execute(job)?;
             if !quiet {
                 report_run(&ended, &out);
             }

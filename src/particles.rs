@@ -192,6 +192,43 @@ impl<const D: usize> Particles<D> {
         out
     }
 
+    /// Number of values [`Particles::state_of`] writes per particle.
+    pub const STATE_LEN: usize = 2 + 3 * D + D * D + 9;
+
+    /// Appends particle `i`'s whole state to `out`: id (as bits), interactions, then every
+    /// array in [`Particles::named_arrays_mut`] order. For moving particles between ranks.
+    pub fn state_of(&self, i: usize, out: &mut Vec<f64>) {
+        out.push(f64::from_bits(self.id[i]));
+        out.push(self.interactions[i] as f64);
+        out.extend((0..D).map(|d| self.pos[d][i]));
+        out.extend((0..D).map(|d| self.vel[d][i]));
+        out.extend((0..D).map(|d| self.acc[d][i]));
+        for a in 0..D {
+            out.extend((0..D).map(|b| self.vgrad[a][b][i]));
+        }
+        out.extend([
+            self.mass[i],
+            self.u[i],
+            self.rho[i],
+            self.p[i],
+            self.cs[i],
+            self.du[i],
+            self.diss[i],
+            self.vsig[i],
+            self.nu[i],
+        ]);
+    }
+
+    /// Appends the particles whose states [`Particles::state_of`] wrote into `buf`.
+    pub fn push_states(&mut self, buf: &[f64]) {
+        let rows = || buf.chunks_exact(Self::STATE_LEN);
+        self.id.extend(rows().map(|c| c[0].to_bits()));
+        self.interactions.extend(rows().map(|c| c[1] as u32));
+        for (k, (_, arr)) in self.named_arrays_mut().into_iter().enumerate() {
+            arr.extend(rows().map(|c| c[2 + k]));
+        }
+    }
+
     /// Keeps the particles with `keep[i]` true, in order, in every array.
     pub fn retain(&mut self, keep: &[bool]) {
         fn filter<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
@@ -291,5 +328,32 @@ mod tests {
         assert_eq!(p.vel[1], vec![0.0, 2.0, 4.0]);
         assert_eq!(p.mass, vec![1.0, 3.0, 5.0]);
         assert_eq!(p.nu.len(), 3);
+    }
+
+    #[test]
+    fn state_round_trips_every_array() {
+        let mut p = Particles::<3>::new();
+        for i in 0..3 {
+            p.push(i, [i as f64, 1.0, 2.0], [3.0, 4.0, i as f64], 1.0 + i as f64, 0.5);
+        }
+        for (k, (_, v)) in p.named_arrays_mut().into_iter().enumerate() {
+            for (i, x) in v.iter_mut().enumerate() {
+                *x = (100 * k + i) as f64;
+            }
+        }
+        p.interactions = vec![7, 8, 9];
+        let mut buf = Vec::new();
+        for i in 0..3 {
+            p.state_of(i, &mut buf);
+        }
+        assert_eq!(buf.len(), 3 * Particles::<3>::STATE_LEN);
+        let mut q = Particles::<3>::new();
+        q.push_states(&buf);
+        assert_eq!(q.id, p.id);
+        assert_eq!(q.interactions, p.interactions);
+        let (a, b) = (p.named_arrays_mut(), q.named_arrays_mut());
+        for ((_, x), (_, y)) in a.iter().zip(b.iter()) {
+            assert_eq!(x, y);
+        }
     }
 }

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::boundary::{BoundaryKind, SimBox};
 use crate::config::{Config, WindowKind};
-use crate::integrate::{StepControl, kdk_step, rhs, time_step};
+use crate::integrate::{StepControl, kdk_step_with, rhs, time_step};
 use crate::io::atomic::write_atomic;
 use crate::io::checkpoint::{self, CheckpointText};
 use crate::io::csv::write_particles;
@@ -25,7 +25,7 @@ use crate::io::summary::{AccretionLedger, Conservation, Summary, TotalsRecord, p
 use crate::kernel::{KERNEL_NAME, Kernel};
 use crate::particles::Particles;
 use crate::problems::{self, InitialState};
-use crate::sweep::{Physics, Window};
+use crate::sweep::{Physics, SweepStats, Window};
 
 /// Default wall-clock seconds between checkpoints.
 const CHECKPOINT_WALL_SECONDS: f64 = 600.0;
@@ -57,6 +57,8 @@ impl RunOptions {
 /// How a run ended.
 #[derive(Clone, Debug)]
 pub enum Ended {
+    /// A rank other than 0 of a distributed run: rank 0 wrote the outputs.
+    Helped,
     /// Reached the end time: `summary.json` and `final.csv` are written.
     Finished(Box<Summary>),
     /// Stopped at `--stop-after`: resume from `checkpoint`.
@@ -79,6 +81,7 @@ impl<const D: usize> Outcome<D> {
         match &self.ended {
             Ended::Finished(s) => Ok(s),
             Ended::Stopped { step, .. } => bail!("the run stopped early at step {step}"),
+            Ended::Helped => bail!("this rank helped; rank 0 has the summary"),
         }
     }
 }
@@ -96,6 +99,15 @@ pub fn run(cfg: &Config, opts: &RunOptions) -> Result<Ended> {
 /// Continues the run in `opts.out` from its newest readable checkpoint; `overrides` may
 /// change keys of the problem file as it was run (e.g. `time.end` to extend a run).
 pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
+    match resume_dimension(opts)? {
+        1 => Ok(resume_with_state::<1>(overrides, opts)?.ended),
+        2 => Ok(resume_with_state::<2>(overrides, opts)?.ended),
+        _ => Ok(resume_with_state::<3>(overrides, opts)?.ended),
+    }
+}
+
+/// The dimension of the run in `opts.out`, from its newest readable checkpoint.
+pub fn resume_dimension(opts: &RunOptions) -> Result<usize> {
     let newest = checkpoint::list(&opts.out)?;
     let first = newest.first().with_context(|| {
         format!(
@@ -104,14 +116,107 @@ pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
             checkpoint::folder(&opts.out).display()
         )
     })?;
-    match checkpoint::dimension(first).or_else(|e| {
+    checkpoint::dimension(first).or_else(|e| {
         // The newest may be unreadable; the previous one names the dimension as well.
         newest.get(1).map_or(Err(e), |p| checkpoint::dimension(p))
-    })? {
-        1 => Ok(resume_with_state::<1>(overrides, opts)?.ended),
-        2 => Ok(resume_with_state::<2>(overrides, opts)?.ended),
-        _ => Ok(resume_with_state::<3>(overrides, opts)?.ended),
+    })
+}
+
+/// The processes a run is spread over, as the step loop sees them: one process ([`Solo`]),
+/// or the ranks of a distributed run (`domain::team`). Every rank runs the same loop on its
+/// own particles; the team evaluates right-hand sides together, reduces figures to global
+/// ones, and collects the particles on rank 0 for output. Every call is collective: all
+/// ranks make it, in the same order.
+pub trait Team<const D: usize> {
+    /// Whether this process writes the outputs.
+    fn is_root(&self) -> bool;
+    fn ranks(&self) -> usize;
+    /// Keeps this rank's share of the whole particle set (at the start of a run).
+    fn distribute(&mut self, p: &mut Particles<D>, bx: &SimBox<D>);
+    /// New accelerations and du/dt of this rank's particles (with external gravity).
+    fn evaluate(
+        &mut self,
+        p: &mut Particles<D>,
+        bx: &SimBox<D>,
+        phys: &Physics<D>,
+        window: Window,
+    ) -> SweepStats;
+    /// Element-wise sum, min or max over the ranks, in place.
+    fn sum(&mut self, x: &mut [f64]);
+    fn min(&mut self, x: &mut [f64]);
+    fn max(&mut self, x: &mut [f64]);
+    /// Every particle, on rank 0 (in id order); None on the other ranks.
+    fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>>;
+    /// After a step: move particles to their new owners, rebalance the load.
+    fn between_steps(&mut self, p: &mut Particles<D>, step: u64, log: &mut RunLog)
+    -> Result<()>;
+    /// Figures of the distribution for `summary.json` (collective; None on one process).
+    fn record(&mut self) -> Option<serde_json::Value>;
+}
+
+/// One process, with threads.
+pub struct Solo;
+
+impl<const D: usize> Team<D> for Solo {
+    fn is_root(&self) -> bool {
+        true
     }
+    fn ranks(&self) -> usize {
+        1
+    }
+    fn distribute(&mut self, _: &mut Particles<D>, _: &SimBox<D>) {}
+    fn evaluate(
+        &mut self,
+        p: &mut Particles<D>,
+        bx: &SimBox<D>,
+        phys: &Physics<D>,
+        window: Window,
+    ) -> SweepStats {
+        rhs(p, bx, phys, window)
+    }
+    fn sum(&mut self, _: &mut [f64]) {}
+    fn min(&mut self, _: &mut [f64]) {}
+    fn max(&mut self, _: &mut [f64]) {}
+    fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>> {
+        Some(p.clone())
+    }
+    fn between_steps(&mut self, _: &mut Particles<D>, _: u64, _: &mut RunLog) -> Result<()> {
+        Ok(())
+    }
+    fn record(&mut self) -> Option<serde_json::Value> {
+        None
+    }
+}
+
+/// Global totals of the particles of every rank.
+fn global_totals<const D: usize>(
+    team: &mut dyn Team<D>,
+    p: &Particles<D>,
+    gravity: Option<&crate::physics::gravity::PointMass>,
+) -> crate::particles::Totals<D> {
+    let mut t = p.totals(gravity);
+    if team.ranks() > 1 {
+        let mut v = vec![
+            t.mass,
+            t.momentum_scale,
+            t.angular_momentum,
+            t.kinetic,
+            t.internal,
+            t.potential,
+        ];
+        v.extend(t.momentum);
+        team.sum(&mut v);
+        (
+            t.mass,
+            t.momentum_scale,
+            t.angular_momentum,
+            t.kinetic,
+            t.internal,
+            t.potential,
+        ) = (v[0], v[1], v[2], v[3], v[4], v[5]);
+        t.momentum = std::array::from_fn(|d| v[6 + d]);
+    }
+    t
 }
 
 /// What the step loop carries between steps, besides the particles: saved in checkpoints.
@@ -205,9 +310,9 @@ impl<const D: usize> Run<D> {
         }
     }
 
-    fn snapshot(&self) -> Snapshot {
+    fn snapshot(&self, p: &Particles<D>) -> Snapshot {
         let mut s = Snapshot::from_particles(
-            &self.p,
+            p,
             self.st.h,
             self.bx.min,
             self.bx.max,
@@ -226,10 +331,26 @@ impl<const D: usize> Run<D> {
         s
     }
 
-    fn write_snapshot(&mut self, dir: &Path, log: &mut RunLog) -> Result<()> {
+    /// Writes the next snapshot from `all` (every particle; None on ranks other than 0,
+    /// which only keep the index in step).
+    fn write_snapshot(
+        &mut self,
+        dir: &Path,
+        all: Option<&Particles<D>>,
+        log: &mut RunLog,
+    ) -> Result<()> {
         let file = format!("snap_{:04}.hdf5", self.st.snapshots.snapshots.len());
         let files = self.cfg.output.files_per_snapshot.unwrap_or(1);
-        write_snapshot(&dir.join(&file), &self.snapshot(), &self.meta, files)?;
+        let Some(all) = all else {
+            self.st.snapshots.snapshots.push(SnapshotEntry {
+                file,
+                time: self.st.t,
+                step: self.st.steps,
+                files,
+            });
+            return Ok(());
+        };
+        write_snapshot(&dir.join(&file), &self.snapshot(all), &self.meta, files)?;
         log.line(&format!(
             "snapshot {file} at t = {} (step {})",
             self.st.t, self.st.steps
@@ -244,14 +365,20 @@ impl<const D: usize> Run<D> {
         write_atomic(&dir.join("snapshots.json"), text.as_bytes())
     }
 
-    fn write_checkpoint(&mut self, dir: &Path, wall: f64, log: &mut RunLog) -> Result<PathBuf> {
+    fn write_checkpoint(
+        &self,
+        dir: &Path,
+        all: &mut Particles<D>,
+        wall: f64,
+        log: &mut RunLog,
+    ) -> Result<PathBuf> {
         let mut st = self.st.clone();
         st.wall_before = wall;
         let text = CheckpointText {
             config_toml: toml::to_string(&self.cfg).context("cannot write the configuration")?,
             state_json: serde_json::to_string(&st)?,
         };
-        let path = checkpoint::write(dir, self.st.steps, &text, &mut self.p)?;
+        let path = checkpoint::write(dir, self.st.steps, &text, all)?;
         log.line(&format!(
             "checkpoint {} at t = {} (step {})",
             path.display(),
@@ -264,24 +391,40 @@ impl<const D: usize> Run<D> {
 
 /// Runs a problem of dimension `D` and returns how it ended with the final particles.
 pub fn run_with_state<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Outcome<D>> {
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create output folder {}", opts.out.display()))?;
-    let mut log = RunLog::open(&opts.out)?;
-    // The problem file as run (overrides applied), for analyses and for reproducing the run.
-    let text = toml::to_string(cfg).context("cannot write the configuration")?;
-    write_atomic(&opts.out.join("run.toml"), text.as_bytes())?;
+    run_in_team(cfg, opts, &mut Solo)
+}
+
+/// [`run_with_state`] on the ranks of `team` (each rank calls it; rank 0 writes).
+pub fn run_in_team<const D: usize>(
+    cfg: &Config,
+    opts: &RunOptions,
+    team: &mut dyn Team<D>,
+) -> Result<Outcome<D>> {
+    let mut log = if team.is_root() {
+        std::fs::create_dir_all(&opts.out)
+            .with_context(|| format!("cannot create output folder {}", opts.out.display()))?;
+        // The problem file as run (overrides applied), for analyses and for reproducing it.
+        let text = toml::to_string(cfg).context("cannot write the configuration")?;
+        write_atomic(&opts.out.join("run.toml"), text.as_bytes())?;
+        RunLog::open(&opts.out)?
+    } else {
+        RunLog::silent()
+    };
     let mut run = start_fresh::<D>(cfg, opts)?;
     log.line(&format!(
-        "start {}: {} particles, {D}D, t_end = {}, {} threads",
+        "start {}: {} particles, {D}D, t_end = {}, {} ranks × {} threads",
         cfg.name(),
         run.p.len(),
         run.st.t_end,
+        team.ranks(),
         rayon::current_num_threads()
     ));
     if !run.st.out_times.is_empty() {
-        run.write_snapshot(&opts.out, &mut log)?;
+        let all = team.is_root().then(|| run.p.clone());
+        run.write_snapshot(&opts.out, all.as_ref(), &mut log)?;
     }
-    advance(run, opts, log)
+    team.distribute(&mut run.p, &run.bx);
+    advance(run, opts, log, team)
 }
 
 /// Continues the run in `opts.out` (dimension `D`) from its newest readable checkpoint.
@@ -289,7 +432,22 @@ pub fn resume_with_state<const D: usize>(
     overrides: &[String],
     opts: &RunOptions,
 ) -> Result<Outcome<D>> {
-    let mut log = RunLog::open(&opts.out)?;
+    resume_in_team(overrides, opts, &mut Solo)
+}
+
+/// [`resume_with_state`] on the ranks of `team`: every rank reads the checkpoint (which
+/// holds every particle, so the number of ranks may differ from the run that wrote it) and
+/// keeps its share.
+pub fn resume_in_team<const D: usize>(
+    overrides: &[String],
+    opts: &RunOptions,
+    team: &mut dyn Team<D>,
+) -> Result<Outcome<D>> {
+    let mut log = if team.is_root() {
+        RunLog::open(&opts.out)?
+    } else {
+        RunLog::silent()
+    };
     let mut last_err = None;
     for path in checkpoint::list(&opts.out)? {
         match checkpoint::read::<D>(&path) {
@@ -317,7 +475,9 @@ pub fn resume_with_state<const D: usize>(
                     st.t,
                     st.steps
                 ));
-                return advance(Run::new(cfg, p, st, bx), opts, log);
+                let mut run = Run::new(cfg, p, st, bx);
+                team.distribute(&mut run.p, &run.bx);
+                return advance(run, opts, log, team);
             }
             Err(e) => {
                 log.line(&format!("skip unreadable checkpoint: {e:#}"));
@@ -418,7 +578,9 @@ fn advance<const D: usize>(
     mut run: Run<D>,
     opts: &RunOptions,
     mut log: RunLog,
+    team: &mut dyn Team<D>,
 ) -> Result<Outcome<D>> {
+    let root = team.is_root();
     let start = Instant::now();
     let wall = |st: &LoopState| st.wall_before + start.elapsed().as_secs_f64();
     let gravity = run.phys.gravity;
@@ -433,8 +595,10 @@ fn advance<const D: usize>(
     let mut last_ckpt = Instant::now();
     let mut last_log = Instant::now();
     let updates_at_start = run.st.updates;
+    // The step a checkpoint was last written at (by this process).
+    let mut ckpt_at: Option<u64> = None;
 
-    let bar = progress_bar(opts.progress);
+    let bar = progress_bar(opts.progress && root);
     while run.st.t < t_end * (1.0 - 1e-12) {
         let st = &mut run.st;
         if st.steps >= run.cfg.time.max_steps {
@@ -444,7 +608,9 @@ fn advance<const D: usize>(
                 st.t
             );
         }
-        let mut dt = time_step(&run.p, st.h, &run.ctl, run.evolve_u);
+        let mut dt = [time_step(&run.p, st.h, &run.ctl, run.evolve_u)];
+        team.min(&mut dt);
+        let [mut dt] = dt;
         if !(dt > 0.0 && dt.is_finite()) {
             bail!(
                 "time step is {dt} at t = {}: the state is not physical (check the set-up)",
@@ -461,28 +627,55 @@ fn advance<const D: usize>(
         if lands {
             dt = target - st.t;
         }
-        st.updates += run.p.len() as u64;
-        let s = kdk_step(&mut run.p, &run.bx, &run.phys, run.window, dt);
+        let mut n = [run.p.len() as f64];
+        team.sum(&mut n);
+        st.updates += n[0] as u64;
+        let (bx, phys, window) = (run.bx, run.phys, run.window);
+        let s = kdk_step_with(&mut run.p, &bx, &phys, dt, |p| {
+            team.evaluate(p, &bx, &phys, window)
+        });
+        let mut sums = [
+            s.pairs as f64,
+            s.ghosts as f64,
+            run.p.interactions.iter().map(|&k| k as f64).sum::<f64>(),
+        ];
+        team.sum(&mut sums);
+        let mut maxes = [s.peak_pairs as f64, s.peak_window_bytes as f64];
+        team.max(&mut maxes);
         st.t = if lands { target } else { st.t + dt };
         st.steps += 1;
         st.evaluations += 1;
-        st.pairs_total += s.pairs;
-        st.peak_pairs = st.peak_pairs.max(s.peak_pairs);
-        st.peak_bytes = st.peak_bytes.max(s.peak_window_bytes);
-        st.ghosts = s.ghosts;
-        st.interactions_sum += run.p.interactions.iter().map(|&k| k as u64).sum::<u64>();
-        let now = run.p.totals(gravity);
+        st.pairs_total += sums[0] as u64;
+        st.peak_pairs = st.peak_pairs.max(maxes[0] as usize);
+        st.peak_bytes = st.peak_bytes.max(maxes[1] as usize);
+        st.ghosts = sums[1] as usize;
+        st.interactions_sum += sums[2] as u64;
+        let now = global_totals(team, &run.p, gravity);
         let (_, dp, _) = now.drift_from(&st.prev.to_totals::<D>());
         st.max_dp_step = st.max_dp_step.max(dp);
         st.prev = TotalsRecord::from(&now);
         if let Some(g) = gravity
             && let Some(r_acc) = g.accretion_radius
-            && st.accreted.accrete(&mut run.p, r_acc, g) > 0
         {
-            if run.p.is_empty() {
-                bail!("every particle was accreted by t = {:.6}", st.t);
+            let gone = if team.ranks() == 1 {
+                st.accreted.accrete(&mut run.p, r_acc, g)
+            } else {
+                // This step's accretion on every rank, added to the (global) ledger.
+                let mut delta = AccretionLedger::default();
+                delta.accrete(&mut run.p, r_acc, g);
+                let mut v = delta.to_values::<D>();
+                team.sum(&mut v);
+                st.accreted.add_values::<D>(&v);
+                v[0] as usize
+            };
+            if gone > 0 {
+                let mut n = [run.p.len() as f64];
+                team.sum(&mut n);
+                if n[0] == 0.0 {
+                    bail!("every particle was accreted by t = {:.6}", st.t);
+                }
+                st.prev = TotalsRecord::from(&global_totals(team, &run.p, gravity));
             }
-            st.prev = TotalsRecord::from(&run.p.totals(gravity));
         }
         if let Some(i) = run.p.u.iter().position(|u| !u.is_finite() || *u < 0.0) {
             bail!(
@@ -494,18 +687,32 @@ fn advance<const D: usize>(
             );
         }
         let (t, steps) = (st.t, st.steps);
-        let snap_due = lands && st.next_snap < st.out_times.len();
-        if snap_due {
-            st.next_snap += 1;
-            run.write_snapshot(&opts.out, &mut log)?;
-        }
+        team.between_steps(&mut run.p, steps, &mut log)?;
+        let snap_due = lands && run.st.next_snap < run.st.out_times.len();
         let stop = opts.stop_after.is_some_and(|k| steps >= k) && t < t_end * (1.0 - 1e-12);
-        let ckpt_due = snap_due
-            || ckpt_steps.is_some_and(|k| steps % k == 0)
-            || last_ckpt.elapsed().as_secs_f64() >= ckpt_wall;
+        // Rank 0's clock decides, so that every rank agrees.
+        let mut wall_due = [(last_ckpt.elapsed().as_secs_f64() >= ckpt_wall) as u8 as f64];
+        if team.ranks() > 1 {
+            wall_due[0] = if root { wall_due[0] } else { 0.0 };
+            team.max(&mut wall_due);
+        }
+        let ckpt_due = snap_due || ckpt_steps.is_some_and(|k| steps % k == 0) || wall_due[0] > 0.0;
+        let mut all = if snap_due || ckpt_due || stop {
+            team.gather(&run.p)
+        } else {
+            None
+        };
+        if snap_due {
+            run.st.next_snap += 1;
+            run.write_snapshot(&opts.out, all.as_ref(), &mut log)?;
+        }
         if ckpt_due || stop {
             let w = wall(&run.st);
-            let path = run.write_checkpoint(&opts.out, w, &mut log)?;
+            let path = match &mut all {
+                Some(all) => run.write_checkpoint(&opts.out, all, w, &mut log)?,
+                None => checkpoint::folder(&opts.out).join(format!("ckpt_{steps:010}.hdf5")),
+            };
+            ckpt_at = Some(steps);
             last_ckpt = Instant::now();
             if stop {
                 bar.finish_and_clear();
@@ -521,7 +728,7 @@ fn advance<const D: usize>(
             }
         }
         let rate = (run.st.updates - updates_at_start) as f64 / start.elapsed().as_secs_f64();
-        if last_log.elapsed().as_secs_f64() >= LOG_SECONDS {
+        if root && last_log.elapsed().as_secs_f64() >= LOG_SECONDS {
             last_log = Instant::now();
             log.line(&format!(
                 "t = {t:.6} step {steps} N = {} dt = {dt:.3e} {rate:.3e} updates/s",
@@ -535,31 +742,48 @@ fn advance<const D: usize>(
         ));
     }
     bar.finish_and_clear();
+    let parallel = team.record();
+    let all = team.gather(&run.p);
+    let Some(mut all) = all else {
+        return Ok(Outcome {
+            ended: Ended::Helped,
+            particles: run.p,
+        });
+    };
     // A checkpoint of the end state lets `--resume --set time.end=…` extend the run.
-    if checkpoint::list(&opts.out)?
-        .first()
-        .is_none_or(|c| !c.ends_with(format!("ckpt_{:010}.hdf5", run.st.steps)))
+    if ckpt_at != Some(run.st.steps)
+        && checkpoint::list(&opts.out)?
+            .first()
+            .is_none_or(|c| !c.ends_with(format!("ckpt_{:010}.hdf5", run.st.steps)))
     {
         let w = wall(&run.st);
-        run.write_checkpoint(&opts.out, w, &mut log)?;
+        run.write_checkpoint(&opts.out, &mut all, w, &mut log)?;
     }
-    let summary = finish(&run, wall(&run.st), &opts.out)?;
+    let ranks = team.ranks();
+    let summary = finish(&run, &all, wall(&run.st), &opts.out, ranks, parallel)?;
     log.line(&format!(
         "end at t = {} after {} steps, {:.2} s, {:.3e} updates/s",
         summary.t_end, summary.steps, summary.wall_seconds, summary.particle_updates_per_second
     ));
     Ok(Outcome {
         ended: Ended::Finished(Box::new(summary)),
-        particles: run.p,
+        particles: all,
     })
 }
 
 /// The final state, error norms and `summary.json` of a run that reached its end time.
-fn finish<const D: usize>(run: &Run<D>, wall: f64, out: &Path) -> Result<Summary> {
-    let (p, st, cfg) = (&run.p, &run.st, &run.cfg);
+fn finish<const D: usize>(
+    run: &Run<D>,
+    p: &Particles<D>,
+    wall: f64,
+    out: &Path,
+    ranks: usize,
+    parallel: Option<serde_json::Value>,
+) -> Result<Summary> {
+    let (st, cfg) = (&run.st, &run.cfg);
     let gravity = run.phys.gravity.as_ref();
     write_particles(&out.join("final.csv"), p, st.h)?;
-    write_snapshot(&out.join("final.hdf5"), &run.snapshot(), &run.meta, 1)?;
+    write_snapshot(&out.join("final.hdf5"), &run.snapshot(p), &run.meta, 1)?;
     let totals_start = st.totals_start.to_totals::<D>();
     let totals_end = p.totals(gravity);
     // Conservation counts what was accreted as still present.
@@ -586,7 +810,7 @@ fn finish<const D: usize>(run: &Run<D>, wall: f64, out: &Path) -> Result<Summary
         pairs_per_second: per_second(st.pairs_total),
         peak_pair_window: st.peak_pairs,
         threads: rayon::current_num_threads(),
-        ranks: 1,
+        ranks,
         conservation: Conservation {
             mass: dm,
             momentum: dp,
@@ -607,6 +831,7 @@ fn finish<const D: usize>(run: &Run<D>, wall: f64, out: &Path) -> Result<Summary
             .and_then(|g| g.accretion_radius)
             .map(|_| st.accreted.clone()),
         ring,
+        parallel,
     };
     summary.write(&out.join("summary.json"))?;
     Ok(summary)

@@ -589,12 +589,6 @@ pub fn evaluate<const D: usize>(
     }
 }
 
-/// Number of f64 values per particle in a migration message.
-fn particle_len<const D: usize>() -> usize {
-    // id, interactions, then every named f64 array.
-    2 + 3 * D + D * D + 9
-}
-
 /// Moves every particle of `parts` whose position lies in another rank's region to that
 /// rank, with all its state (so that the next kick and time step are the same as if it had
 /// stayed). Returns how many particles this rank sent away.
@@ -610,19 +604,9 @@ pub fn migrate<const D: usize>(
         .collect();
     let keep: Vec<bool> = owners.iter().map(|&o| o == me).collect();
     let mut out: Vec<Vec<f64>> = vec![Vec::new(); nr];
-    let ids = parts.id.clone();
-    let inter = parts.interactions.clone();
-    {
-        let arrays = parts.named_arrays_mut();
-        debug_assert_eq!(arrays.len() + 2, particle_len::<D>());
-        for (i, &o) in owners.iter().enumerate() {
-            if o == me {
-                continue;
-            }
-            let m = &mut out[o];
-            m.push(f64::from_bits(ids[i]));
-            m.push(inter[i] as f64);
-            m.extend(arrays.iter().map(|(_, v)| v[i]));
+    for (i, &o) in owners.iter().enumerate() {
+        if o != me {
+            parts.state_of(i, &mut out[o]);
         }
     }
     let moved = keep.iter().filter(|&&k| !k).count();
@@ -631,19 +615,13 @@ pub fn migrate<const D: usize>(
             comm.send(q, tag::MIGRATE, m);
         }
     }
-    parts.retain(&keep);
-    let len = particle_len::<D>();
+    if moved > 0 {
+        parts.retain(&keep);
+    }
     for q in 0..nr {
-        if q == me {
-            continue;
-        }
-        let buf = comm.recv(q, tag::MIGRATE);
-        for c in buf.chunks_exact(len) {
-            parts.id.push(c[0].to_bits());
-            parts.interactions.push(c[1] as u32);
-            for (v, (_, arr)) in c[2..].iter().zip(parts.named_arrays_mut()) {
-                arr.push(*v);
-            }
+        if q != me {
+            let buf = comm.recv(q, tag::MIGRATE);
+            parts.push_states(&buf);
         }
     }
     moved

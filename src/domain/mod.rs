@@ -21,6 +21,7 @@ pub mod ghosts;
 #[cfg(feature = "mpi")]
 pub mod mpi_comm;
 pub mod report;
+pub mod team;
 
 pub use balance::{LoadMeasure, LoadStats};
 pub use decomposition::{Decomposition, RegionTree, TreeShape, factor_regions};

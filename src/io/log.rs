@@ -8,7 +8,8 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 
 pub struct RunLog {
-    file: std::fs::File,
+    /// None: a log that writes nothing (ranks other than 0 of a distributed run).
+    file: Option<std::fs::File>,
     start: Instant,
 }
 
@@ -22,16 +23,26 @@ impl RunLog {
             .open(&path)
             .with_context(|| format!("cannot open {}", path.display()))?;
         Ok(Self {
-            file,
+            file: Some(file),
             start: Instant::now(),
         })
+    }
+
+    /// A log that writes nothing.
+    pub fn silent() -> Self {
+        Self {
+            file: None,
+            start: Instant::now(),
+        }
     }
 
     /// Appends one line, prefixed with the wall seconds since the log was opened. A log
     /// that cannot be written must not stop the run: the error is ignored.
     pub fn line(&mut self, msg: &str) {
         let s = self.start.elapsed().as_secs_f64();
-        let _ = writeln!(self.file, "[{s:10.2} s] {msg}");
-        let _ = self.file.flush();
+        if let Some(f) = &mut self.file {
+            let _ = writeln!(f, "[{s:10.2} s] {msg}");
+            let _ = f.flush();
+        }
     }
 }

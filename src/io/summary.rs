@@ -43,6 +43,9 @@ pub struct Summary {
     /// The spreading ring's parameters (ring problems only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ring: Option<crate::problems::ring::RingRecord>,
+    /// Distributed runs: decomposition, load balance, communication and waiting per rank.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parallel: Option<serde_json::Value>,
 }
 
 /// Mass, momentum, angular momentum and energy removed by accretion: with it the
@@ -59,6 +62,40 @@ pub struct AccretionLedger {
 }
 
 impl AccretionLedger {
+    /// The ledger as numbers (particles, mass, L, kinetic, internal, potential, momentum…),
+    /// to be summed over ranks.
+    pub fn to_values<const D: usize>(&self) -> Vec<f64> {
+        let mut v = vec![
+            self.particles as f64,
+            self.mass,
+            self.angular_momentum,
+            self.kinetic_energy,
+            self.internal_energy,
+            self.potential_energy,
+        ];
+        v.extend((0..D).map(|d| self.momentum.get(d).copied().unwrap_or(0.0)));
+        v
+    }
+
+    /// Adds a ledger given as [`AccretionLedger::to_values`].
+    pub fn add_values<const D: usize>(&mut self, v: &[f64]) {
+        if v[0] == 0.0 {
+            return;
+        }
+        if self.momentum.len() != D {
+            self.momentum = vec![0.0; D];
+        }
+        self.particles += v[0] as u64;
+        self.mass += v[1];
+        self.angular_momentum += v[2];
+        self.kinetic_energy += v[3];
+        self.internal_energy += v[4];
+        self.potential_energy += v[5];
+        for d in 0..D {
+            self.momentum[d] += v[6 + d];
+        }
+    }
+
     /// Removes the particles within `radius` of the centre, books what they carried, and
     /// returns how many went.
     pub fn accrete<const D: usize>(

@@ -1,0 +1,299 @@
+//! The ranks of a distributed run as the step loop's [`Team`] (paper, Sections 2.3–2.4):
+//! the k-d decomposition built from particle counts before the first step, the distributed
+//! evaluation of each step ([`super::exchange`]), and between steps the load measured,
+//! the cuts moved when the imbalance exceeds a threshold, and particles moved to their new
+//! owners. Rank 0 collects the particles for snapshots, checkpoints and the final outputs.
+//!
+//! Works over any [`Comm`]: MPI ranks (`mpirun -n N sphdisk run …`, feature `mpi`) or
+//! in-process ranks ([`super::comm::ThreadComm`], used by the tests).
+
+use anyhow::{Result, bail};
+use serde_json::json;
+
+use super::balance::{LoadMeasure, LoadStats, needs_rebalance, wait_time_correction};
+use super::comm::Comm;
+use super::decomposition::Decomposition;
+use super::exchange::{self, ExchangeStats};
+use crate::boundary::SimBox;
+use crate::config::Config;
+use crate::integrate::add_gravity;
+use crate::io::log::RunLog;
+use crate::particles::Particles;
+use crate::simulation::{self, Ended, RunOptions, Team};
+use crate::sweep::{Physics, SweepStats, Window};
+
+/// Imbalance (max/mean interactions − 1) above which the cuts move between steps.
+pub const REBALANCE_THRESHOLD: f64 = 0.03;
+/// At most this many particles (over all ranks) are sampled to place the cuts.
+const CUT_SAMPLE: usize = 400_000;
+/// Imbalance history kept for `summary.json`: every step up to this many, then thinned.
+const HISTORY: usize = 2000;
+
+/// A distributed run's ranks.
+pub struct Distributed<'c> {
+    comm: &'c mut dyn Comm,
+    decomp: Option<Decomposition>,
+    measure: LoadMeasure,
+    /// Per step: max/mean of the interaction load per rank.
+    imbalance: Vec<(u64, f64)>,
+    rebalances: u64,
+    migrated: u64,
+    evaluations: u64,
+    /// This rank's totals over the run.
+    totals: ExchangeStats,
+    last: ExchangeStats,
+    /// Test hook: fail on this rank after this step (`SPHDISK_FAIL_AT=rank:step`).
+    fail_at: Option<(usize, u64)>,
+}
+
+impl<'c> Distributed<'c> {
+    pub fn new(comm: &'c mut dyn Comm) -> Self {
+        let fail_at = std::env::var("SPHDISK_FAIL_AT").ok().and_then(|s| {
+            let (r, k) = s.split_once(':')?;
+            Some((r.trim().parse().ok()?, k.trim().parse().ok()?))
+        });
+        Self {
+            comm,
+            decomp: None,
+            measure: LoadMeasure::ParticleCount,
+            imbalance: Vec::new(),
+            rebalances: 0,
+            migrated: 0,
+            evaluations: 0,
+            totals: ExchangeStats::default(),
+            last: ExchangeStats::default(),
+            fail_at,
+        }
+    }
+
+    fn decomp(&self) -> &Decomposition {
+        self.decomp.as_ref().expect("distribute() before the first step")
+    }
+
+    /// Moves the cuts to balance `weights` (one per particle of this rank), from a sample
+    /// of every rank's particles gathered on every rank (so that all place the same cuts).
+    fn rebalance<const D: usize>(&mut self, p: &Particles<D>, weights: &[f64]) {
+        let mut n = [p.len() as f64];
+        self.comm.sum(&mut n);
+        let stride = (n[0] as usize).div_ceil(CUT_SAMPLE).max(1);
+        let mut mine = Vec::new();
+        for i in (0..p.len()).step_by(stride) {
+            mine.extend((0..D).map(|d| p.pos[d][i]));
+            mine.push(weights[i] * stride as f64);
+        }
+        let all = self.comm.all_gather(mine);
+        let mut pos: [Vec<f64>; D] = std::array::from_fn(|_| Vec::new());
+        let mut w = Vec::new();
+        for part in &all {
+            for c in part.chunks_exact(D + 1) {
+                for d in 0..D {
+                    pos[d].push(c[d]);
+                }
+                w.push(c[D]);
+            }
+        }
+        let coords: Vec<&[f64]> = pos.iter().map(Vec::as_slice).collect();
+        self.decomp
+            .as_mut()
+            .expect("decomposition")
+            .rebalance(&coords, &w, 1.0);
+        self.rebalances += 1;
+    }
+}
+
+impl<const D: usize> Team<D> for Distributed<'_> {
+    fn is_root(&self) -> bool {
+        self.comm.rank() == 0
+    }
+
+    fn ranks(&self) -> usize {
+        self.comm.size()
+    }
+
+    fn distribute(&mut self, p: &mut Particles<D>, bx: &SimBox<D>) {
+        // Every rank holds the same whole set here: the same cuts everywhere.
+        let decomp = Decomposition::for_particles(self.comm.size(), bx, p, &[]);
+        let me = self.comm.rank();
+        let keep: Vec<bool> = (0..p.len())
+            .map(|i| {
+                let mut x = [0.0; 3];
+                x[..D].copy_from_slice(&p.position(i));
+                decomp.owner(x) == me
+            })
+            .collect();
+        p.retain(&keep);
+        self.decomp = Some(decomp);
+    }
+
+    fn evaluate(
+        &mut self,
+        p: &mut Particles<D>,
+        bx: &SimBox<D>,
+        phys: &Physics<D>,
+        window: Window,
+    ) -> SweepStats {
+        let decomp = self.decomp.take().expect("distribute() before the first step");
+        let s = exchange::evaluate(self.comm, &decomp, p, bx, phys, window);
+        self.decomp = Some(decomp);
+        add_gravity(p, phys);
+        self.evaluations += 1;
+        let t = &mut self.totals;
+        t.copies_sent += s.copies_sent;
+        t.copies_received += s.copies_received;
+        t.values_sent += s.values_sent;
+        t.messages_sent += s.messages_sent;
+        t.wait += s.wait;
+        t.total += s.total;
+        t.sweep.pairs += s.sweep.pairs;
+        t.sweep.times.add(&s.sweep.times);
+        self.last = s;
+        s.sweep
+    }
+
+    fn sum(&mut self, x: &mut [f64]) {
+        self.comm.sum(x);
+    }
+
+    fn min(&mut self, x: &mut [f64]) {
+        self.comm.min(x);
+    }
+
+    fn max(&mut self, x: &mut [f64]) {
+        self.comm.max(x);
+    }
+
+    fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>> {
+        let mut buf = Vec::with_capacity(p.len() * Particles::<D>::STATE_LEN);
+        for i in 0..p.len() {
+            p.state_of(i, &mut buf);
+        }
+        let parts = self.comm.gather(buf)?;
+        let mut rows: Vec<&[f64]> = parts
+            .iter()
+            .flat_map(|b| b.chunks_exact(Particles::<D>::STATE_LEN))
+            .collect();
+        rows.sort_by_key(|r| r[0].to_bits());
+        let flat: Vec<f64> = rows.concat();
+        let mut all = Particles::new();
+        all.push_states(&flat);
+        Some(all)
+    }
+
+    fn between_steps(&mut self, p: &mut Particles<D>, step: u64, log: &mut RunLog) -> Result<()> {
+        if let Some((r, k)) = self.fail_at
+            && r == self.comm.rank()
+            && k == step
+        {
+            bail!("failure injected by SPHDISK_FAIL_AT={r}:{k} (test of the abort path)");
+        }
+        // Load of the step just taken, per rank: interactions, and the waiting time.
+        let interactions: f64 = p.interactions.iter().map(|&k| k as f64).sum();
+        let per_rank = self
+            .comm
+            .all_gather(vec![interactions, self.last.wait, self.last.total]);
+        let loads: Vec<f64> = per_rank.iter().map(|v| v[0]).collect();
+        let stats = LoadStats::from_loads(loads);
+        if self.imbalance.len() >= HISTORY {
+            // Keep every other entry: the history stays bounded and spans the whole run.
+            let kept: Vec<(u64, f64)> = self.imbalance.iter().copied().step_by(2).collect();
+            self.imbalance = kept;
+        }
+        self.imbalance.push((step, stats.max_over_mean));
+        self.measure = self.measure.next(true, &stats, REBALANCE_THRESHOLD);
+        if needs_rebalance(&stats, REBALANCE_THRESHOLD) {
+            let mut factor = 1.0;
+            if self.measure == LoadMeasure::WaitTime {
+                let step_time = per_rank.iter().map(|v| v[2]).fold(0.0, f64::max);
+                let waits: Vec<f64> = per_rank.iter().map(|v| v[1]).collect();
+                factor = wait_time_correction(step_time, &waits)[self.comm.rank()];
+            }
+            let w: Vec<f64> = p
+                .interactions
+                .iter()
+                .map(|&k| factor * (k as f64).max(1.0))
+                .collect();
+            self.rebalance(p, &w);
+            log.line(&format!(
+                "step {step}: load max/mean {:.4} > {:.2}: cuts moved ({:?})",
+                stats.max_over_mean,
+                1.0 + REBALANCE_THRESHOLD,
+                self.measure
+            ));
+        }
+        let decomp = self.decomp.take().expect("decomposition");
+        self.migrated += exchange::migrate(self.comm, &decomp, p) as u64;
+        self.decomp = Some(decomp);
+        Ok(())
+    }
+
+    fn record(&mut self) -> Option<serde_json::Value> {
+        let t = &self.totals;
+        let mine = vec![
+            t.wait,
+            t.total,
+            t.copies_sent as f64,
+            t.copies_received as f64,
+            t.values_sent as f64,
+            t.messages_sent as f64,
+            self.migrated as f64,
+            t.sweep.pairs as f64,
+        ];
+        let all = self.comm.gather(mine)?;
+        let evals = self.evaluations.max(1) as f64;
+        let per_rank: Vec<serde_json::Value> = all
+            .iter()
+            .enumerate()
+            .map(|(r, v)| {
+                json!({
+                    "rank": r,
+                    "wait_seconds": v[0],
+                    "evaluate_seconds": v[1],
+                    "wait_fraction": if v[1] > 0.0 { v[0] / v[1] } else { 0.0 },
+                    "copies_sent_per_step": v[2] / evals,
+                    "copies_received_per_step": v[3] / evals,
+                    "bytes_sent_per_step": 8.0 * v[4] / evals,
+                    "messages_per_step": v[5] / evals,
+                    "particles_migrated": v[6],
+                    "pairs_per_step": v[7] / evals,
+                })
+            })
+            .collect();
+        let hist: Vec<f64> = self.imbalance.iter().map(|x| x.1).collect();
+        let max = hist.iter().copied().fold(1.0, f64::max);
+        let mean = hist.iter().sum::<f64>() / hist.len().max(1) as f64;
+        let d = self.decomp();
+        Some(json!({
+            "ranks": self.comm.size(),
+            "tree": d.shape().describe(d.dim()),
+            "rebalance_threshold": REBALANCE_THRESHOLD,
+            "rebalances": self.rebalances,
+            "load_measure": format!("{:?}", self.measure),
+            "imbalance_max": max,
+            "imbalance_mean": mean,
+            "imbalance_history": self.imbalance.iter().map(|&(s, x)| json!([s, x])).collect::<Vec<_>>(),
+            "per_rank": per_rank,
+        }))
+    }
+}
+
+/// Runs the problem on the ranks of `comm` (each rank calls this; rank 0 writes).
+pub fn run(comm: &mut dyn Comm, cfg: &Config, opts: &RunOptions) -> Result<Ended> {
+    let mut team = Distributed::new(comm);
+    Ok(match cfg.dimension() {
+        1 => simulation::run_in_team::<1>(cfg, opts, &mut team)?.ended,
+        2 => simulation::run_in_team::<2>(cfg, opts, &mut team)?.ended,
+        3 => simulation::run_in_team::<3>(cfg, opts, &mut team)?.ended,
+        d => bail!("key `problem.dimension`: must be 1, 2 or 3, got {d}"),
+    })
+}
+
+/// Continues the run in `opts.out` from its newest checkpoint on the ranks of `comm`
+/// (any number of ranks: the checkpoint holds every particle).
+pub fn resume(comm: &mut dyn Comm, overrides: &[String], opts: &RunOptions) -> Result<Ended> {
+    let mut team = Distributed::new(comm);
+    Ok(match simulation::resume_dimension(opts)? {
+        1 => simulation::resume_in_team::<1>(overrides, opts, &mut team)?.ended,
+        2 => simulation::resume_in_team::<2>(overrides, opts, &mut team)?.ended,
+        _ => simulation::resume_in_team::<3>(overrides, opts, &mut team)?.ended,
+    })
+}
