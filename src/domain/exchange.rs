@@ -327,8 +327,11 @@ impl<const D: usize> RankExchange<'_, D> {
 
 impl<const D: usize> Exchange<D> for RankExchange<'_, D> {
     fn may_finish(&self, t: usize, k: u8) -> bool {
-        (!self.export_slab[t] || self.all_partials_in(k))
-            && (!self.import_slab[t] || k == FORCE || self.all_finals_in(k))
+        !self.export_slab[t] || self.all_partials_in(k)
+    }
+
+    fn copies_ready(&self, t: usize, k: u8) -> bool {
+        !self.import_slab[t] || k == 0 || k >= FORCE || self.all_finals_in(k)
     }
 
     fn poll(&mut self, st: &mut SweepState<'_, D>) -> bool {
@@ -366,6 +369,9 @@ impl<const D: usize> Exchange<D> for RankExchange<'_, D> {
     fn wait(&mut self, st: &mut SweepState<'_, D>) {
         match self.next_needed() {
             Some((k, is_final, q)) => {
+                if std::env::var("SPHDISK_DEBUG_WAIT").is_ok() {
+                    eprintln!("DBG rank {} waits k={k} final={is_final} from {q}; psent {:?} fsent {:?} import {:?} export {:?} slab_stage {:?} pair_stage {:?} pin {:?} fin {:?}", self.comm.rank(), self.partials_sent, self.finals_sent, self.import_slabs, self.export_slabs, st.slab_stage, st.pair_stage, self.partials_in, self.finals_in);
+                }
                 self.receive(st, k, is_final, q, true);
             }
             None => panic!("distributed sweep: slabs unfinished but no message outstanding"),

@@ -42,16 +42,20 @@ pub struct Distributed<'c> {
     /// This rank's totals over the run.
     totals: ExchangeStats,
     last: ExchangeStats,
-    /// Test hook: fail on this rank after this step (`SPHDISK_FAIL_AT=rank:step`).
+    /// Test hooks: return an error (`SPHDISK_FAIL_AT=rank:step`) or panic
+    /// (`SPHDISK_PANIC_AT=rank:step`) on that rank after that step, to exercise the abort.
     fail_at: Option<(usize, u64)>,
+    panic_at: Option<(usize, u64)>,
 }
 
 impl<'c> Distributed<'c> {
     pub fn new(comm: &'c mut dyn Comm) -> Self {
-        let fail_at = std::env::var("SPHDISK_FAIL_AT").ok().and_then(|s| {
-            let (r, k) = s.split_once(':')?;
-            Some((r.trim().parse().ok()?, k.trim().parse().ok()?))
-        });
+        let hook = |var: &str| {
+            std::env::var(var).ok().and_then(|s| {
+                let (r, k) = s.split_once(':')?;
+                Some((r.trim().parse().ok()?, k.trim().parse().ok()?))
+            })
+        };
         Self {
             comm,
             decomp: None,
@@ -62,7 +66,8 @@ impl<'c> Distributed<'c> {
             evaluations: 0,
             totals: ExchangeStats::default(),
             last: ExchangeStats::default(),
-            fail_at,
+            fail_at: hook("SPHDISK_FAIL_AT"),
+            panic_at: hook("SPHDISK_PANIC_AT"),
         }
     }
 
@@ -185,6 +190,12 @@ impl<const D: usize> Team<D> for Distributed<'_> {
             && k == step
         {
             bail!("failure injected by SPHDISK_FAIL_AT={r}:{k} (test of the abort path)");
+        }
+        if let Some((r, k)) = self.panic_at
+            && r == self.comm.rank()
+            && k == step
+        {
+            panic!("panic injected by SPHDISK_PANIC_AT={r}:{k} (test of the abort path)");
         }
         // Load of the step just taken, per rank: interactions, and the waiting time.
         let interactions: f64 = p.interactions.iter().map(|&k| k as f64).sum();

@@ -163,8 +163,11 @@ impl Dependencies {
 /// particles, which change "when a particle changes its state". The single-process sweep
 /// uses [`NoExchange`].
 pub trait Exchange<const D: usize> {
-    /// Whether slab `t` may finish stage `stage` now (its particles' values are complete).
+    /// Whether slab `t` may finish stage `stage` now (its reals' sums are complete).
     fn may_finish(&self, t: usize, stage: u8) -> bool;
+    /// Whether the copies of other ranks' particles in slab `t` hold their values after
+    /// stage `stage` (so that the next sum may use them).
+    fn copies_ready(&self, t: usize, stage: u8) -> bool;
     /// Sends what has become ready and takes in what has arrived, without waiting; true if
     /// that changed anything the sweep waits for.
     fn poll(&mut self, st: &mut SweepState<'_, D>) -> bool;
@@ -194,6 +197,9 @@ pub struct NoExchange;
 
 impl<const D: usize> Exchange<D> for NoExchange {
     fn may_finish(&self, _: usize, _: u8) -> bool {
+        true
+    }
+    fn copies_ready(&self, _: usize, _: u8) -> bool {
         true
     }
     fn poll(&mut self, _: &mut SweepState<'_, D>) -> bool {
@@ -300,7 +306,10 @@ pub fn sweep<const D: usize>(
                 if next > FORCE {
                     continue;
                 }
-                let ready = slab_stage[t] >= next - 1 && (t == 0 || slab_stage[t - 1] >= next - 1);
+                let ready = slab_stage[t] >= next - 1
+                    && (t == 0 || slab_stage[t - 1] >= next - 1)
+                    && ex.copies_ready(t, next - 1)
+                    && (t == 0 || ex.copies_ready(t - 1, next - 1));
                 if !ready {
                     continue;
                 }

@@ -1,0 +1,145 @@
+//! Distributed runs over real MPI ranks: `mpirun -n 1..4 sphdisk run …` (built with
+//! `--features mpi`; needs OpenMPI's `mpirun`). Each test launches its own `mpirun`, so MPI
+//! is initialised once per process. `.ci/run` runs these with
+//! `cargo test --release --features mpi --test mpi`.
+#![cfg(feature = "mpi")]
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use common::{assert_same_state, problem_file};
+use sphdisk::io::checkpoint;
+use sphdisk::io::hdf5::read_snapshot;
+use sphdisk::io::summary::Summary;
+
+/// `mpirun -n ranks sphdisk --threads 1 args…` with the settings a container needs
+/// (root, more ranks than cores, no binding so rayon may use the cores); returns (exit
+/// code, stderr, wall seconds).
+fn mpirun(ranks: usize, args: &[&str], env: &[(&str, &str)]) -> (i32, String, f64) {
+    let mut cmd = Command::new("mpirun");
+    cmd.args(["-n", &ranks.to_string(), env!("CARGO_BIN_EXE_sphdisk"), "--threads", "1"])
+        .args(args)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .env("OMPI_MCA_hwloc_base_binding_policy", "none");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let start = Instant::now();
+    let out = cmd.output().expect("mpirun starts (is OpenMPI installed?)");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        start.elapsed().as_secs_f64(),
+    )
+}
+
+fn run_ok(ranks: usize, file: &str, out: &Path, extra: &[&str]) {
+    let p = problem_file(file);
+    let o = out.to_string_lossy();
+    let mut args = vec!["run", p.as_str(), "--out", &o, "--quiet"];
+    args.extend_from_slice(extra);
+    let (code, err, _) = mpirun(ranks, &args, &[]);
+    assert_eq!(code, 0, "mpirun -n {ranks} {file} failed: {err}");
+}
+
+fn one_step<const D: usize>(file: &str, sets: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut extra = vec!["--stop-after", "1"];
+    for s in sets {
+        extra.extend(["--set", s]);
+    }
+    let state = |ranks: usize| {
+        let out = dir.path().join(format!("n{ranks}"));
+        run_ok(ranks, file, &out, &extra);
+        let ckpt = checkpoint::list(&out).unwrap().remove(0);
+        checkpoint::read::<D>(&ckpt).unwrap().1
+    };
+    let one = state(1);
+    for ranks in [2, 3, 4] {
+        assert_same_state(&one, &mut state(ranks), &format!("{file}, mpirun -n {ranks}"));
+    }
+}
+
+#[test]
+fn mpi_sod_tube_after_one_step_is_the_same_on_1_to_4_ranks() {
+    one_step::<1>("sod.toml", &[]);
+}
+
+#[test]
+fn mpi_ring_after_one_step_is_the_same_on_1_to_4_ranks() {
+    one_step::<2>("ring.toml", &["particles.n=20"]);
+}
+
+#[test]
+fn mpi_blast_3d_after_one_step_is_the_same_on_1_to_4_ranks() {
+    one_step::<3>("sedov.toml", &["particles.n=16"]);
+}
+
+fn summary(dir: &Path) -> Summary {
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary parses")
+}
+
+#[test]
+fn mpi_sod_tube_to_the_end_on_3_ranks_matches_one_rank() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("1"), dir.path().join("3"));
+    run_ok(1, "sod.toml", &a, &[]);
+    run_ok(3, "sod.toml", &b, &[]);
+    let (one, three) = (summary(&a), summary(&b));
+    assert_eq!(three.ranks, 3);
+    assert_eq!(one.steps, three.steps);
+    for (k, x) in &one.errors {
+        let y = three.errors[k];
+        assert!((x - y).abs() <= 5e-4 * x.abs(), "errors.{k}: {x} vs {y}");
+    }
+    let (ea, eb) = (one.totals_end.energy, three.totals_end.energy);
+    assert!((ea - eb).abs() <= 1e-12 * ea.abs(), "energy {ea} vs {eb}");
+    // The snapshots rank 0 wrote hold every particle.
+    let snap = read_snapshot(&b.join("final.hdf5")).unwrap();
+    assert_eq!(snap.id.len(), one.particles);
+}
+
+#[test]
+fn mpi_a_failing_rank_ends_the_job_at_once_with_its_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fail");
+    let p = problem_file("sod.toml");
+    let o = out.to_string_lossy();
+    let (code, err, wall) = mpirun(
+        3,
+        &["run", &p, "--out", &o, "--quiet"],
+        &[("SPHDISK_FAIL_AT", "1:5")],
+    );
+    assert_ne!(code, 0, "the job must fail");
+    assert!(
+        err.contains("rank 1") && err.contains("failure injected"),
+        "the failing rank and its message: {err}"
+    );
+    assert!(wall < Duration::from_secs(60).as_secs_f64(), "{wall} s");
+    // What rank 0 wrote before stays readable.
+    assert!(out.join("run.toml").is_file());
+    let snap = read_snapshot(&out.join("snap_0000.hdf5")).expect("the first snapshot reads");
+    assert!(!snap.id.is_empty());
+}
+
+#[test]
+fn mpi_a_panicking_rank_aborts_the_job() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("panic");
+    let p = problem_file("sod.toml");
+    let o = out.to_string_lossy();
+    let (code, err, wall) = mpirun(
+        2,
+        &["run", &p, "--out", &o, "--quiet"],
+        &[("SPHDISK_PANIC_AT", "1:3")],
+    );
+    assert_ne!(code, 0);
+    assert!(err.contains("rank 1 failed") && err.contains("panic injected"), "{err}");
+    assert!(wall < 60.0, "{wall} s");
+}
