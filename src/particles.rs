@@ -334,7 +334,13 @@ mod tests {
     fn state_round_trips_every_array() {
         let mut p = Particles::<3>::new();
         for i in 0..3 {
-            p.push(i, [i as f64, 1.0, 2.0], [3.0, 4.0, i as f64], 1.0 + i as f64, 0.5);
+            p.push(
+                i,
+                [i as f64, 1.0, 2.0],
+                [3.0, 4.0, i as f64],
+                1.0 + i as f64,
+                0.5,
+            );
         }
         for (k, (_, v)) in p.named_arrays_mut().into_iter().enumerate() {
             for (i, x) in v.iter_mut().enumerate() {

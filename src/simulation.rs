@@ -148,8 +148,7 @@ pub trait Team<const D: usize> {
     /// Every particle, on rank 0 (in id order); None on the other ranks.
     fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>>;
     /// After a step: move particles to their new owners, rebalance the load.
-    fn between_steps(&mut self, p: &mut Particles<D>, step: u64, log: &mut RunLog)
-    -> Result<()>;
+    fn between_steps(&mut self, p: &mut Particles<D>, step: u64, log: &mut RunLog) -> Result<()>;
     /// Figures of the distribution for `summary.json` (collective; None on one process).
     fn record(&mut self) -> Option<serde_json::Value>;
 }

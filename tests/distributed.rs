@@ -115,8 +115,16 @@ fn assert_same_run(a: &Summary, b: &Summary, keys: &[&str]) {
 fn sod_tube_to_the_end_on_3_ranks_has_the_same_totals_and_errors() {
     let cfg = config("sod.toml", &[]);
     let dir = tempfile::tempdir().unwrap();
-    let one = finished(run_on::<1>(&cfg, 1, &RunOptions::quiet(dir.path().join("1"))));
-    let three = finished(run_on::<1>(&cfg, 3, &RunOptions::quiet(dir.path().join("3"))));
+    let one = finished(run_on::<1>(
+        &cfg,
+        1,
+        &RunOptions::quiet(dir.path().join("1")),
+    ));
+    let three = finished(run_on::<1>(
+        &cfg,
+        3,
+        &RunOptions::quiet(dir.path().join("3")),
+    ));
     assert!(one.steps >= 100, "{} steps", one.steps);
     assert_same_run(&one, &three, &["l1_density", "l1_velocity", "l1_pressure"]);
     let par = three.parallel.expect("parallel record");
@@ -126,13 +134,18 @@ fn sod_tube_to_the_end_on_3_ranks_has_the_same_totals_and_errors() {
 
 #[test]
 fn blast_3d_for_100_steps_on_4_ranks_has_the_same_totals_and_errors() {
-    let cfg = config(
-        "sedov.toml",
-        &["particles.n=16", "time.courant=0.08"],
-    );
+    let cfg = config("sedov.toml", &["particles.n=16", "time.courant=0.08"]);
     let dir = tempfile::tempdir().unwrap();
-    let one = finished(run_on::<3>(&cfg, 1, &RunOptions::quiet(dir.path().join("1"))));
-    let four = finished(run_on::<3>(&cfg, 4, &RunOptions::quiet(dir.path().join("4"))));
+    let one = finished(run_on::<3>(
+        &cfg,
+        1,
+        &RunOptions::quiet(dir.path().join("1")),
+    ));
+    let four = finished(run_on::<3>(
+        &cfg,
+        4,
+        &RunOptions::quiet(dir.path().join("4")),
+    ));
     assert!(one.steps >= 100, "{} steps", one.steps);
     let keys: Vec<&str> = one.errors.keys().map(String::as_str).collect();
     assert_same_run(&one, &four, &keys);
@@ -142,8 +155,16 @@ fn blast_3d_for_100_steps_on_4_ranks_has_the_same_totals_and_errors() {
 fn ring_with_accretion_on_3_ranks_keeps_the_ledger_and_the_totals() {
     let cfg = config("ring.toml", &["particles.n=20", "time.end=6.0"]);
     let dir = tempfile::tempdir().unwrap();
-    let one = finished(run_on::<2>(&cfg, 1, &RunOptions::quiet(dir.path().join("1"))));
-    let three = finished(run_on::<2>(&cfg, 3, &RunOptions::quiet(dir.path().join("3"))));
+    let one = finished(run_on::<2>(
+        &cfg,
+        1,
+        &RunOptions::quiet(dir.path().join("1")),
+    ));
+    let three = finished(run_on::<2>(
+        &cfg,
+        3,
+        &RunOptions::quiet(dir.path().join("3")),
+    ));
     assert!(one.steps >= 100, "{} steps", one.steps);
     assert_same_run(&one, &three, &[]);
     assert_eq!(
@@ -151,14 +172,22 @@ fn ring_with_accretion_on_3_ranks_keeps_the_ledger_and_the_totals() {
         three.accretion.as_ref().map(|a| a.particles)
     );
     // Mass in particles plus the ledger equals the initial mass to round-off.
-    assert!(three.conservation.mass <= 1e-14, "{}", three.conservation.mass);
+    assert!(
+        three.conservation.mass <= 1e-14,
+        "{}",
+        three.conservation.mass
+    );
 }
 
 #[test]
 fn a_run_resumes_on_another_number_of_ranks_with_the_same_result() {
     let cfg = config("sedov.toml", &["particles.n=12", "time.end=0.01"]);
     let dir = tempfile::tempdir().unwrap();
-    let straight = finished(run_on::<3>(&cfg, 1, &RunOptions::quiet(dir.path().join("a"))));
+    let straight = finished(run_on::<3>(
+        &cfg,
+        1,
+        &RunOptions::quiet(dir.path().join("a")),
+    ));
     // Stop on 3 ranks, resume on 2.
     let out = dir.path().join("b");
     let stopped = run_on::<3>(

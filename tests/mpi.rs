@@ -20,12 +20,18 @@ use sphdisk::io::summary::Summary;
 /// code, stderr, wall seconds).
 fn mpirun(ranks: usize, args: &[&str], env: &[(&str, &str)]) -> (i32, String, f64) {
     let mut cmd = Command::new("mpirun");
-    cmd.args(["-n", &ranks.to_string(), env!("CARGO_BIN_EXE_sphdisk"), "--threads", "1"])
-        .args(args)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .env("OMPI_MCA_hwloc_base_binding_policy", "none");
+    cmd.args([
+        "-n",
+        &ranks.to_string(),
+        env!("CARGO_BIN_EXE_sphdisk"),
+        "--threads",
+        "1",
+    ])
+    .args(args)
+    .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+    .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+    .env("OMPI_MCA_hwloc_base_binding_policy", "none");
     for (k, v) in env {
         cmd.env(k, v);
     }
@@ -61,7 +67,11 @@ fn one_step<const D: usize>(file: &str, sets: &[&str]) {
     };
     let one = state(1);
     for ranks in [2, 3, 4] {
-        assert_same_state(&one, &mut state(ranks), &format!("{file}, mpirun -n {ranks}"));
+        assert_same_state(
+            &one,
+            &mut state(ranks),
+            &format!("{file}, mpirun -n {ranks}"),
+        );
     }
 }
 
@@ -140,6 +150,9 @@ fn mpi_a_panicking_rank_aborts_the_job() {
         &[("SPHDISK_PANIC_AT", "1:3")],
     );
     assert_ne!(code, 0);
-    assert!(err.contains("rank 1 failed") && err.contains("panic injected"), "{err}");
+    assert!(
+        err.contains("rank 1 failed") && err.contains("panic injected"),
+        "{err}"
+    );
     assert!(wall < 60.0, "{wall} s");
 }

@@ -53,7 +53,7 @@ pub struct ExchangeStats {
 
 /// The cuboid of `rank`, extended to infinity where it touches the box faces (boundary
 /// images outside the box are located in the adjacent region).
-fn extended_region(decomp: &Decomposition, rank: usize) -> ([f64; 3], [f64; 3]) {
+fn extended_region(decomp: &Decomposition, rank: usize) -> Cuboid {
     let (mut lo, mut hi) = decomp.region(rank);
     let (blo, bhi) = (decomp.lo(), decomp.hi());
     for d in 0..decomp.dim() {
@@ -67,7 +67,10 @@ fn extended_region(decomp: &Decomposition, rank: usize) -> ([f64; 3], [f64; 3]) 
     (lo, hi)
 }
 
-fn dist2(x: [f64; 3], c: &([f64; 3], [f64; 3]), dim: usize) -> f64 {
+/// A cuboid (lo, hi).
+type Cuboid = ([f64; 3], [f64; 3]);
+
+fn dist2(x: [f64; 3], c: &Cuboid, dim: usize) -> f64 {
     (0..dim)
         .map(|d| {
             let gap = (c.0[d] - x[d]).max(x[d] - c.1[d]).max(0.0);
@@ -86,10 +89,7 @@ fn point<const D: usize>(pos: &[Vec<f64>; D], i: usize) -> [f64; 3] {
 
 /// Per rank s, the lower ranks q < s whose extended regions lie closer than `support` to
 /// s's: the only ranks that can need a copy of something located in s.
-fn lower_neighbours(
-    decomp: &Decomposition,
-    support: f64,
-) -> Vec<Vec<(usize, ([f64; 3], [f64; 3]))>> {
+fn lower_neighbours(decomp: &Decomposition, support: f64) -> Vec<Vec<(usize, Cuboid)>> {
     let n = decomp.n_regions();
     let ext: Vec<_> = (0..n).map(|r| extended_region(decomp, r)).collect();
     let s2 = support * support;
@@ -370,7 +370,18 @@ impl<const D: usize> Exchange<D> for RankExchange<'_, D> {
         match self.next_needed() {
             Some((k, is_final, q)) => {
                 if std::env::var("SPHDISK_DEBUG_WAIT").is_ok() {
-                    eprintln!("DBG rank {} waits k={k} final={is_final} from {q}; psent {:?} fsent {:?} import {:?} export {:?} slab_stage {:?} pair_stage {:?} pin {:?} fin {:?}", self.comm.rank(), self.partials_sent, self.finals_sent, self.import_slabs, self.export_slabs, st.slab_stage, st.pair_stage, self.partials_in, self.finals_in);
+                    eprintln!(
+                        "DBG rank {} waits k={k} final={is_final} from {q}; psent {:?} fsent {:?} import {:?} export {:?} slab_stage {:?} pair_stage {:?} pin {:?} fin {:?}",
+                        self.comm.rank(),
+                        self.partials_sent,
+                        self.finals_sent,
+                        self.import_slabs,
+                        self.export_slabs,
+                        st.slab_stage,
+                        st.pair_stage,
+                        self.partials_in,
+                        self.finals_in
+                    );
                 }
                 self.receive(st, k, is_final, q, true);
             }

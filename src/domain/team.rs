@@ -72,7 +72,9 @@ impl<'c> Distributed<'c> {
     }
 
     fn decomp(&self) -> &Decomposition {
-        self.decomp.as_ref().expect("distribute() before the first step")
+        self.decomp
+            .as_ref()
+            .expect("distribute() before the first step")
     }
 
     /// Moves the cuts to balance `weights` (one per particle of this rank), from a sample
@@ -137,7 +139,10 @@ impl<const D: usize> Team<D> for Distributed<'_> {
         phys: &Physics<D>,
         window: Window,
     ) -> SweepStats {
-        let decomp = self.decomp.take().expect("distribute() before the first step");
+        let decomp = self
+            .decomp
+            .take()
+            .expect("distribute() before the first step");
         let s = exchange::evaluate(self.comm, &decomp, p, bx, phys, window);
         self.decomp = Some(decomp);
         add_gravity(p, phys);

@@ -238,9 +238,8 @@ pub fn sweep<const D: usize>(
     ex: &mut dyn Exchange<D>,
 ) -> (Vec<Work<D>>, SweepStats) {
     let clock = Instant::now();
-    let local = local;
     let mut work = vec![Work::<D>::default(); local.len()];
-    let deps = Dependencies::new(&local);
+    let deps = Dependencies::new(local);
     let ns = local.num_slabs();
     let mut blocks: Vec<Option<PairBlock>> = (0..ns).map(|_| None).collect();
     let mut pair_stage = vec![0u8; ns];

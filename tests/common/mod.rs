@@ -77,7 +77,8 @@ pub fn assert_same_state<const D: usize>(
 ) {
     assert_eq!(a.len(), b.len(), "{what}: particle count");
     let mut a = a.clone();
-    let index: std::collections::HashMap<u64, usize> = a.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
+    let index: std::collections::HashMap<u64, usize> =
+        a.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
     let order: Vec<usize> = b.id.iter().map(|id| index[id]).collect();
     assert_eq!(a.interactions.len(), b.interactions.len());
     for (k, &j) in order.iter().enumerate() {
@@ -106,4 +107,3 @@ pub fn assert_same_state<const D: usize>(
     }
     eprintln!("{what}: largest difference {worst:.1e} of the rms");
 }
-
