@@ -12,13 +12,16 @@ use mpi::topology::{Communicator, SimpleCommunicator};
 
 use super::comm::Comm;
 
+/// A send in flight and the buffer it reads (leaked until the send completes).
+type InFlight = (Request<'static, [f64], StaticScope>, *mut [f64]);
+
 /// The world communicator.
 pub struct MpiComm {
     world: SimpleCommunicator,
     rank: usize,
     size: usize,
     /// Sends in flight with the buffers they read (freed once complete).
-    pending: Vec<(Request<'static, [f64], StaticScope>, *mut [f64])>,
+    pending: Vec<InFlight>,
 }
 
 impl MpiComm {
