@@ -741,6 +741,8 @@ fn advance<const D: usize>(
         ));
     }
     bar.finish_and_clear();
+    // The loop's wall time: the final outputs below are not part of it.
+    let wall_loop = wall(&run.st);
     let parallel = team.record();
     let all = team.gather(&run.p);
     let Some(mut all) = all else {
@@ -755,11 +757,10 @@ fn advance<const D: usize>(
             .first()
             .is_none_or(|c| !c.ends_with(format!("ckpt_{:010}.hdf5", run.st.steps)))
     {
-        let w = wall(&run.st);
-        run.write_checkpoint(&opts.out, &mut all, w, &mut log)?;
+        run.write_checkpoint(&opts.out, &mut all, wall_loop, &mut log)?;
     }
     let ranks = team.ranks();
-    let summary = finish(&run, &all, wall(&run.st), &opts.out, ranks, parallel)?;
+    let summary = finish(&run, &all, wall_loop, &opts.out, ranks, parallel)?;
     log.line(&format!(
         "end at t = {} after {} steps, {:.2} s, {:.3e} updates/s",
         summary.t_end, summary.steps, summary.wall_seconds, summary.particle_updates_per_second

@@ -10,7 +10,7 @@
 use anyhow::{Result, bail};
 use serde_json::json;
 
-use super::balance::{LoadMeasure, LoadStats, needs_rebalance, wait_time_correction};
+use super::balance::{CORRECTION_RANGE, LoadMeasure, LoadStats, needs_rebalance};
 use super::comm::Comm;
 use super::decomposition::Decomposition;
 use super::exchange::{self, ExchangeStats};
@@ -34,8 +34,8 @@ pub struct Distributed<'c> {
     comm: &'c mut dyn Comm,
     decomp: Option<Decomposition>,
     measure: LoadMeasure,
-    /// Per step: max/mean of the interaction load per rank.
-    imbalance: Vec<(u64, f64)>,
+    /// Per step: max/mean over ranks of the interactions and of the busy time.
+    imbalance: Vec<(u64, f64, f64)>,
     rebalances: u64,
     migrated: u64,
     evaluations: u64,
@@ -202,36 +202,49 @@ impl<const D: usize> Team<D> for Distributed<'_> {
         {
             panic!("panic injected by SPHDISK_PANIC_AT={r}:{k} (test of the abort path)");
         }
-        // Load of the step just taken, per rank: interactions, and the waiting time.
+        // Load of the step just taken, per rank: interactions, and the busy time (the
+        // evaluation's time less the time spent waiting for other ranks).
         let interactions: f64 = p.interactions.iter().map(|&k| k as f64).sum();
-        let per_rank = self
-            .comm
-            .all_gather(vec![interactions, self.last.wait, self.last.total]);
-        let loads: Vec<f64> = per_rank.iter().map(|v| v[0]).collect();
-        let stats = LoadStats::from_loads(loads);
+        let busy = (self.last.total - self.last.wait).max(0.0);
+        let per_rank = self.comm.all_gather(vec![interactions, busy]);
+        let stats = LoadStats::from_loads(per_rank.iter().map(|v| v[0]).collect());
+        let busy_stats = LoadStats::from_loads(per_rank.iter().map(|v| v[1]).collect());
         if self.imbalance.len() >= HISTORY {
             // Keep every other entry: the history stays bounded and spans the whole run.
-            let kept: Vec<(u64, f64)> = self.imbalance.iter().copied().step_by(2).collect();
+            let kept: Vec<_> = self.imbalance.iter().copied().step_by(2).collect();
             self.imbalance = kept;
         }
-        self.imbalance.push((step, stats.max_over_mean));
+        self.imbalance
+            .push((step, stats.max_over_mean, busy_stats.max_over_mean));
         self.measure = self.measure.next(true, &stats, REBALANCE_THRESHOLD);
-        if needs_rebalance(&stats, REBALANCE_THRESHOLD) {
-            let mut factor = 1.0;
-            if self.measure == LoadMeasure::WaitTime {
-                let step_time = per_rank.iter().map(|v| v[2]).fold(0.0, f64::max);
-                let waits: Vec<f64> = per_rank.iter().map(|v| v[1]).collect();
-                factor = wait_time_correction(step_time, &waits)[self.comm.rank()];
+        // Paper 2.4: balance the interactions; once they are balanced, fine-tune by the time
+        // each rank was busy. A rank's time per interaction (it includes the pairs it
+        // evaluates for higher ranks' particles, and its speed) weighs its particles, so
+        // the cuts equalise the predicted busy time.
+        let (trigger, weight_per_interaction) = match self.measure {
+            LoadMeasure::WaitTime => {
+                let me = &per_rank[self.comm.rank()];
+                let mean_cost = per_rank.iter().map(|v| v[1]).sum::<f64>()
+                    / per_rank.iter().map(|v| v[0]).sum::<f64>().max(1.0);
+                let cost = if me[0] > 0.0 && mean_cost > 0.0 {
+                    (me[1] / me[0] / mean_cost).clamp(CORRECTION_RANGE.0, CORRECTION_RANGE.1)
+                } else {
+                    1.0
+                };
+                (&busy_stats, cost)
             }
+            _ => (&stats, 1.0),
+        };
+        if needs_rebalance(trigger, REBALANCE_THRESHOLD) {
             let w: Vec<f64> = p
                 .interactions
                 .iter()
-                .map(|&k| factor * (k as f64).max(1.0))
+                .map(|&k| weight_per_interaction * (k as f64).max(1.0))
                 .collect();
             self.rebalance(p, &w);
             log.line(&format!(
-                "step {step}: load max/mean {:.4} > {:.2}: cuts moved ({:?})",
-                stats.max_over_mean,
+                "step {step}: load max/mean {:.4} > {:.2} ({:?}): cuts moved",
+                trigger.max_over_mean,
                 1.0 + REBALANCE_THRESHOLD,
                 self.measure
             ));
@@ -274,9 +287,13 @@ impl<const D: usize> Team<D> for Distributed<'_> {
                 })
             })
             .collect();
-        let hist: Vec<f64> = self.imbalance.iter().map(|x| x.1).collect();
-        let max = hist.iter().copied().fold(1.0, f64::max);
-        let mean = hist.iter().sum::<f64>() / hist.len().max(1) as f64;
+        let stat = |f: fn(&(u64, f64, f64)) -> f64| {
+            let h: Vec<f64> = self.imbalance.iter().map(f).collect();
+            let max = h.iter().copied().fold(1.0, f64::max);
+            (max, h.iter().sum::<f64>() / h.len().max(1) as f64)
+        };
+        let (max, mean) = stat(|x| x.1);
+        let (busy_max, busy_mean) = stat(|x| x.2);
         let d = self.decomp();
         Some(json!({
             "ranks": self.comm.size(),
@@ -284,9 +301,14 @@ impl<const D: usize> Team<D> for Distributed<'_> {
             "rebalance_threshold": REBALANCE_THRESHOLD,
             "rebalances": self.rebalances,
             "load_measure": format!("{:?}", self.measure),
+            // max/mean over ranks of the interactions (the balanced load)…
             "imbalance_max": max,
             "imbalance_mean": mean,
-            "imbalance_history": self.imbalance.iter().map(|&(s, x)| json!([s, x])).collect::<Vec<_>>(),
+            // …and of the busy time (what the wait-time tuning balances).
+            "busy_imbalance_max": busy_max,
+            "busy_imbalance_mean": busy_mean,
+            // [step, interactions max/mean, busy time max/mean]
+            "imbalance_history": self.imbalance.iter().map(|&(s, x, b)| json!([s, x, b])).collect::<Vec<_>>(),
             "per_rank": per_rank,
         }))
     }
