@@ -629,6 +629,8 @@ fn advance<const D: usize>(
         let mut n = [run.p.len() as f64];
         team.sum(&mut n);
         st.updates += n[0] as u64;
+        // Particles over all ranks (at the step's start), for the progress lines.
+        let n_all = n[0] as usize;
         let (bx, phys, window) = (run.bx, run.phys, run.window);
         let s = kdk_step_with(&mut run.p, &bx, &phys, dt, |p| {
             team.evaluate(p, &bx, &phys, window)
@@ -730,14 +732,12 @@ fn advance<const D: usize>(
         if root && last_log.elapsed().as_secs_f64() >= LOG_SECONDS {
             last_log = Instant::now();
             log.line(&format!(
-                "t = {t:.6} step {steps} N = {} dt = {dt:.3e} {rate:.3e} updates/s",
-                run.p.len()
+                "t = {t:.6} step {steps} N = {n_all} dt = {dt:.3e} {rate:.3e} updates/s"
             ));
         }
         bar.set_position((t / t_end * 1000.0) as u64);
         bar.set_message(format!(
-            "t = {t:.4}  step {steps}  N = {}  dt = {dt:.2e}  {rate:.2e} updates/s",
-            run.p.len()
+            "t = {t:.4}  step {steps}  N = {n_all}  dt = {dt:.2e}  {rate:.2e} updates/s"
         ));
     }
     bar.finish_and_clear();

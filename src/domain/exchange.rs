@@ -369,18 +369,16 @@ impl<const D: usize> Exchange<D> for RankExchange<'_, D> {
     fn wait(&mut self, st: &mut SweepState<'_, D>) {
         match self.next_needed() {
             Some((k, is_final, q)) => {
-                if std::env::var("SPHDISK_DEBUG_WAIT").is_ok() {
+                if std::env::var_os("SPHDISK_DEBUG_WAIT").is_some() {
+                    // Diagnosing a stalled exchange: what this rank waits for, and why.
                     eprintln!(
-                        "DBG rank {} waits k={k} final={is_final} from {q}; psent {:?} fsent {:?} import {:?} export {:?} slab_stage {:?} pair_stage {:?} pin {:?} fin {:?}",
+                        "rank {} waits for {} of stage {k} from rank {q}; sent partials {:?}, \
+                         finals {:?}; slab stages {:?}",
                         self.comm.rank(),
+                        if is_final { "finals" } else { "partial sums" },
                         self.partials_sent,
                         self.finals_sent,
-                        self.import_slabs,
-                        self.export_slabs,
-                        st.slab_stage,
-                        st.pair_stage,
-                        self.partials_in,
-                        self.finals_in
+                        st.slab_stage
                     );
                 }
                 self.receive(st, k, is_final, q, true);
