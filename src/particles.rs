@@ -231,29 +231,31 @@ impl<const D: usize> Particles<D> {
 
     /// Keeps the particles with `keep[i]` true, in order, in every array.
     pub fn retain(&mut self, keep: &[bool]) {
-        fn filter<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
-            let mut k = 0;
-            v.retain(|_| {
-                k += 1;
-                keep[k - 1]
-            });
-        }
-        filter(&mut self.id, keep);
+        retain_by(&mut self.id, keep);
         for d in 0..D {
-            filter(&mut self.pos[d], keep);
-            filter(&mut self.vel[d], keep);
-            filter(&mut self.acc[d], keep);
+            retain_by(&mut self.pos[d], keep);
+            retain_by(&mut self.vel[d], keep);
+            retain_by(&mut self.acc[d], keep);
             for b in 0..D {
-                filter(&mut self.vgrad[d][b], keep);
+                retain_by(&mut self.vgrad[d][b], keep);
             }
         }
-        filter(&mut self.mass, keep);
-        filter(&mut self.u, keep);
+        retain_by(&mut self.mass, keep);
+        retain_by(&mut self.u, keep);
         for v in self.derived_scalars_mut() {
-            filter(v, keep);
+            retain_by(v, keep);
         }
-        filter(&mut self.interactions, keep);
+        retain_by(&mut self.interactions, keep);
     }
+}
+
+/// Keeps the entries of `v` with `keep[i]` true, in order.
+pub fn retain_by<T>(v: &mut Vec<T>, keep: &[bool]) {
+    let mut k = 0;
+    v.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
 }
 
 /// Conserved totals of a particle set.

@@ -61,10 +61,11 @@ pub fn region_loads(decomp: &Decomposition, positions: &[&[f64]], weights: &[f64
 ///    weighs its number of interactions (neighbours within the support, as counted by the
 ///    sweep in `Particles::interactions`), since the pair sums dominate the work;
 /// 3. [`LoadMeasure::WaitTime`] once an acceptable set of boundaries has been found: the
-///    interaction weights are fine-tuned by the time each rank spent waiting for the others —
-///    each region's weights are multiplied by its [`wait_time_correction`] factor (busy time
-///    over mean busy time), so that regions that were slower than their weight predicted
-///    shrink.
+///    interaction weights are fine-tuned by the time each rank spent waiting for the others.
+///    A distributed run (`domain::team`) weighs each rank's interactions by its
+///    [`interaction_cost_factors`] (busy time per interaction over the mean), so that the
+///    cuts equalise the predicted busy time; [`wait_time_correction`] is the simpler factor
+///    (busy time over mean busy time), which a second correction would undo.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LoadMeasure {
     ParticleCount,
@@ -110,6 +111,28 @@ pub fn wait_time_correction(step_time: f64, wait: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Per-rank factors for the interaction weights from the last step: rank r had
+/// `interactions[r]` interactions and was busy (evaluation time less waiting) for
+/// `busy[r]` seconds; its factor is its busy time per interaction over the mean, clamped
+/// to [`CORRECTION_RANGE`]. It includes what a rank does beyond its own particles' sums
+/// (the pairs it evaluates for higher ranks' particles) and its speed, and it stays the
+/// same after the cuts move, so repeated corrections do not undo each other. Ranks with no
+/// interactions or no timing get 1.
+pub fn interaction_cost_factors(interactions: &[f64], busy: &[f64]) -> Vec<f64> {
+    let mean_cost = busy.iter().sum::<f64>() / interactions.iter().sum::<f64>().max(1.0);
+    interactions
+        .iter()
+        .zip(busy)
+        .map(|(&k, &b)| {
+            if k > 0.0 && mean_cost > 0.0 {
+                (b / k / mean_cost).clamp(CORRECTION_RANGE.0, CORRECTION_RANGE.1)
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
 /// Per-particle `weights` (empty: 1 each) times the factor of each particle's owner.
 pub fn corrected_weights(
     decomp: &Decomposition,
@@ -135,6 +158,16 @@ pub fn needs_rebalance(stats: &LoadStats, threshold: f64) -> bool {
 mod tests {
     use super::*;
     use crate::domain::decomposition::TreeShape;
+
+    #[test]
+    fn interaction_cost_factors_weigh_slower_interactions_more() {
+        // Rank 1 needs twice the time per interaction of rank 0; rank 2 measured nothing.
+        let f = interaction_cost_factors(&[100.0, 100.0, 0.0], &[1.0, 2.0, 0.0]);
+        let mean = 3.0 / 200.0;
+        assert!((f[0] - 0.01 / mean).abs() < 1e-12);
+        assert!((f[1] - 0.02 / mean).abs() < 1e-12);
+        assert_eq!(f[2], 1.0);
+    }
 
     #[test]
     fn load_stats_measure_max_over_mean_and_efficiency() {

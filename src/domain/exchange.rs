@@ -26,7 +26,8 @@
 use std::time::Instant;
 
 use super::comm::{Comm, tag};
-use super::decomposition::Decomposition;
+use super::decomposition::{Decomposition, coords};
+use super::ghosts::{cuboid_distance2, point_cuboid_distance2};
 use crate::boundary::{BoundaryKind, SimBox};
 use crate::grid::Grid;
 use crate::particles::Particles;
@@ -70,15 +71,6 @@ fn extended_region(decomp: &Decomposition, rank: usize) -> Cuboid {
 /// A cuboid (lo, hi).
 type Cuboid = ([f64; 3], [f64; 3]);
 
-fn dist2(x: [f64; 3], c: &Cuboid, dim: usize) -> f64 {
-    (0..dim)
-        .map(|d| {
-            let gap = (c.0[d] - x[d]).max(x[d] - c.1[d]).max(0.0);
-            gap * gap
-        })
-        .sum()
-}
-
 fn point<const D: usize>(pos: &[Vec<f64>; D], i: usize) -> [f64; 3] {
     let mut x = [0.0; 3];
     for d in 0..D {
@@ -97,17 +89,7 @@ fn lower_neighbours(decomp: &Decomposition, support: f64) -> Vec<Vec<(usize, Cub
     (0..n)
         .map(|s| {
             (0..s)
-                .filter(|&q| {
-                    let d2: f64 = (0..dim)
-                        .map(|d| {
-                            let gap = (ext[s].0[d] - ext[q].1[d])
-                                .max(ext[q].0[d] - ext[s].1[d])
-                                .max(0.0);
-                            gap * gap
-                        })
-                        .sum();
-                    d2 < s2
-                })
+                .filter(|&q| cuboid_distance2(ext[q], ext[s], dim) < s2)
                 .map(|q| (q, ext[q]))
                 .collect()
         })
@@ -409,15 +391,13 @@ pub fn evaluate<const D: usize>(
     let lower = lower_neighbours(decomp, support);
 
     // This rank's reals and their boundary images; where each is located, who needs it.
-    let mine = Elements::reals_and_images(parts, bx, support, |_| 0);
-    let n_real = mine.n_real;
-    let mut elems = Elements::<D> {
-        n_real,
-        ..Default::default()
-    };
+    let mut elems = Elements::reals_and_images(parts, bx, support, |_| 0);
+    let n_real = elems.n_real;
+    let mut keep = vec![true; elems.len()];
     let mut outgoing: Vec<Vec<f64>> = vec![Vec::new(); nr];
     let mut sent_src: Vec<Vec<(u32, [f64; D], bool)>> = vec![Vec::new(); nr];
-    for k in 0..mine.len() {
+    for k in 0..elems.len() {
+        let mine = &elems;
         let x = point(&mine.pos, k);
         let at = decomp.owner(x);
         let real = k < n_real;
@@ -437,7 +417,7 @@ pub fn evaluate<const D: usize>(
             emit(at);
         }
         for &(q, ref ext) in &lower[at] {
-            if dist2(x, ext, decomp.dim()) < s2 {
+            if point_cuboid_distance2(x, *ext, decomp.dim()) < s2 {
                 if q == me {
                     here = true;
                 } else {
@@ -452,19 +432,11 @@ pub fn evaluate<const D: usize>(
         } else {
             class::NO_PAIR
         };
-        if real || here {
-            elems.push(
-                std::array::from_fn(|d| mine.pos[d][k]),
-                std::array::from_fn(|d| mine.vel[d][k]),
-                mine.mass[k],
-                mine.u[k],
-                mine.sign[k],
-                mine.fold[k],
-                cls,
-                mine.src[k],
-            );
-        }
+        // Reals always stay (their sums are accumulated here); images only if needed here.
+        keep[k] = real || here;
+        elems.class[k] = cls;
     }
+    elems.retain(&keep);
     let mut values_sent = 0;
     let mut messages_sent = 0;
     let copies_sent: usize = sent_src.iter().map(Vec::len).sum();
@@ -513,8 +485,7 @@ pub fn evaluate<const D: usize>(
     let mut wait = wait_clock.elapsed().as_secs_f64();
     let copies_received = elems.len() - first_received;
 
-    // Reals first, as `Local::from_elements` expects: `elems` was filled with them first
-    // only if every real stayed; it did (reals are always kept), in store order.
+    // Reals first, in store order, as `Local::from_elements` expects (reals always stay).
     debug_assert!(
         elems.src[..n_real]
             .iter()
@@ -614,9 +585,7 @@ pub fn migrate<const D: usize>(
 ) -> usize {
     let me = comm.rank();
     let nr = comm.size();
-    let owners: Vec<usize> = (0..parts.len())
-        .map(|i| decomp.owner(point(&parts.pos, i)))
-        .collect();
+    let owners = decomp.owners(&coords(parts));
     let keep: Vec<bool> = owners.iter().map(|&o| o == me).collect();
     let mut out: Vec<Vec<f64>> = vec![Vec::new(); nr];
     for (i, &o) in owners.iter().enumerate() {

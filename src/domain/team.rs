@@ -10,9 +10,9 @@
 use anyhow::{Result, bail};
 use serde_json::json;
 
-use super::balance::{CORRECTION_RANGE, LoadMeasure, LoadStats, needs_rebalance};
+use super::balance::{LoadMeasure, LoadStats, interaction_cost_factors, needs_rebalance};
 use super::comm::Comm;
-use super::decomposition::Decomposition;
+use super::decomposition::{Decomposition, coords};
 use super::exchange::{self, ExchangeStats};
 use crate::boundary::SimBox;
 use crate::config::Config;
@@ -121,12 +121,10 @@ impl<const D: usize> Team<D> for Distributed<'_> {
         // Every rank holds the same whole set here: the same cuts everywhere.
         let decomp = Decomposition::for_particles(self.comm.size(), bx, p, &[]);
         let me = self.comm.rank();
-        let keep: Vec<bool> = (0..p.len())
-            .map(|i| {
-                let mut x = [0.0; 3];
-                x[..D].copy_from_slice(&p.position(i));
-                decomp.owner(x) == me
-            })
+        let keep: Vec<bool> = decomp
+            .owners(&coords(p))
+            .into_iter()
+            .map(|o| o == me)
             .collect();
         p.retain(&keep);
         self.decomp = Some(decomp);
@@ -204,11 +202,13 @@ impl<const D: usize> Team<D> for Distributed<'_> {
         }
         // Load of the step just taken, per rank: interactions, and the busy time (the
         // evaluation's time less the time spent waiting for other ranks).
-        let interactions: f64 = p.interactions.iter().map(|&k| k as f64).sum();
-        let busy = (self.last.total - self.last.wait).max(0.0);
-        let per_rank = self.comm.all_gather(vec![interactions, busy]);
-        let stats = LoadStats::from_loads(per_rank.iter().map(|v| v[0]).collect());
-        let busy_stats = LoadStats::from_loads(per_rank.iter().map(|v| v[1]).collect());
+        let my_interactions: f64 = p.interactions.iter().map(|&k| k as f64).sum();
+        let my_busy = (self.last.total - self.last.wait).max(0.0);
+        let per_rank = self.comm.all_gather(vec![my_interactions, my_busy]);
+        let interactions: Vec<f64> = per_rank.iter().map(|v| v[0]).collect();
+        let busy: Vec<f64> = per_rank.iter().map(|v| v[1]).collect();
+        let stats = LoadStats::from_loads(interactions.clone());
+        let busy_stats = LoadStats::from_loads(busy.clone());
         if self.imbalance.len() >= HISTORY {
             // Keep every other entry: the history stays bounded and spans the whole run.
             let kept: Vec<_> = self.imbalance.iter().copied().step_by(2).collect();
@@ -223,14 +223,7 @@ impl<const D: usize> Team<D> for Distributed<'_> {
         // the cuts equalise the predicted busy time.
         let (trigger, weight_per_interaction) = match self.measure {
             LoadMeasure::WaitTime => {
-                let me = &per_rank[self.comm.rank()];
-                let mean_cost = per_rank.iter().map(|v| v[1]).sum::<f64>()
-                    / per_rank.iter().map(|v| v[0]).sum::<f64>().max(1.0);
-                let cost = if me[0] > 0.0 && mean_cost > 0.0 {
-                    (me[1] / me[0] / mean_cost).clamp(CORRECTION_RANGE.0, CORRECTION_RANGE.1)
-                } else {
-                    1.0
-                };
+                let cost = interaction_cost_factors(&interactions, &busy)[self.comm.rank()];
                 (&busy_stats, cost)
             }
             _ => (&stats, 1.0),

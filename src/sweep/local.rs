@@ -3,7 +3,7 @@
 
 use crate::boundary::{Ghost, SimBox, make_ghosts};
 use crate::grid::Grid;
-use crate::particles::Particles;
+use crate::particles::{Particles, retain_by};
 
 /// Per-particle accumulators of the three sums. Kept apart from [`Local`] so that the sums can
 /// write them in parallel while reading the particles' state.
@@ -158,6 +158,21 @@ impl<const D: usize> Elements<D> {
 
     pub fn is_empty(&self) -> bool {
         self.mass.is_empty()
+    }
+
+    /// Keeps the elements with `keep[k]` true, in order (the first `n_real` must stay).
+    pub fn retain(&mut self, keep: &[bool]) {
+        debug_assert!(keep[..self.n_real].iter().all(|&k| k), "reals stay");
+        for d in 0..D {
+            retain_by(&mut self.pos[d], keep);
+            retain_by(&mut self.vel[d], keep);
+        }
+        retain_by(&mut self.mass, keep);
+        retain_by(&mut self.u, keep);
+        retain_by(&mut self.sign, keep);
+        retain_by(&mut self.fold, keep);
+        retain_by(&mut self.class, keep);
+        retain_by(&mut self.src, keep);
     }
 }
 
