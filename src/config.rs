@@ -330,8 +330,13 @@ impl Default for RingParams {
 pub struct DiskParams {
     /// Disk mass (the disk does not self-gravitate; this sets the density scale).
     pub mass: f64,
-    /// Inner edge: Σ ∝ R^(−p) (1 − √(r_in/R)) (zero-torque taper).
+    /// Inner edge: Σ ∝ R^(−p) / (1 + exp(−(R − r_in)/w)), a smooth step of width
+    /// w = `inner_width` H(r_in) centred on r_in.
     pub r_in: f64,
+    /// Width of the inner edge in scale heights at r_in. A pressure-supported edge is
+    /// Rayleigh-unstable (κ² < 0) where it is sharper than about H/2: the set-up refuses
+    /// such an edge.
+    pub inner_width: f64,
     /// Outer scale: Σ is further multiplied by exp(−(R/r_out)⁴).
     pub r_out: f64,
     /// Power-law index of Σ.
@@ -342,6 +347,9 @@ pub struct DiskParams {
     pub layers_h: f64,
     /// Run length in orbits at r_in (used when `time.end` is absent).
     pub orbits: f64,
+    /// Start the rings in equilibrium with the SPH forces (one evaluation; in 3D a few
+    /// more to relax the layers' heights) instead of the analytic profile's.
+    pub balance: bool,
 }
 
 impl Default for DiskParams {
@@ -349,11 +357,13 @@ impl Default for DiskParams {
         Self {
             mass: 0.01,
             r_in: 1.0,
+            inner_width: 1.0,
             r_out: 1.6,
             p: 1.0,
             cutoff: 0.02,
             layers_h: 2.5,
             orbits: 10.0,
+            balance: true,
         }
     }
 }

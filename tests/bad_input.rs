@@ -228,4 +228,16 @@ fn bad_viscosity_and_disk_settings_are_named() {
         &["check", &p, "--set", "gravity.gm=-1"],
         &["gravity.gm"],
     );
+    // A pressure-supported disk edge sharper than about H/2 has κ² < 0.
+    let disk = problem("disk3d.toml");
+    assert_fails(
+        d.path(),
+        &["check", &disk, "--set", "disk.inner_width=0.2"],
+        &["Rayleigh-unstable", "disk.inner_width"],
+    );
+    assert_fails(
+        d.path(),
+        &["check", &disk, "--set", "disk.inner_width=-1"],
+        &["disk.inner_width"],
+    );
 }

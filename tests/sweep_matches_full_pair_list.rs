@@ -107,6 +107,7 @@ fn check_sums<const D: usize>(mut p: Particles<D>, bx: &SimBox<D>, h: f64) {
             alpha: 1.0,
             beta: 2.0,
             balsara: true,
+            ..ArtificialViscosity::default()
         },
     );
     let mut reference = p.clone();

@@ -7,6 +7,7 @@ pub mod ring;
 pub mod ring_report;
 pub mod sedov;
 pub mod sod_report;
+pub mod viscous_disk;
 
 use crate::particles::Particles;
 

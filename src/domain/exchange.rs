@@ -725,6 +725,7 @@ mod tests {
                 alpha: 1.0,
                 beta: 2.0,
                 balsara: true,
+                ..ArtificialViscosity::default()
             },
             viscosity: ViscosityModel {
                 nu: Some(0.01),

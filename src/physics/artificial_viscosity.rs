@@ -1,5 +1,6 @@
 //! Artificial viscosity for shocks: Monaghan's (1997) signal-velocity form, with an optional
-//! Balsara (1995) switch. Off (α = β = 0) by default; shock problems turn it on.
+//! Balsara (1995) switch, and optionally acting on the velocity relative to circular orbits
+//! about the central mass (for disks). Off (α = β = 0) by default; shock problems turn it on.
 
 use serde::{Deserialize, Serialize};
 
@@ -12,6 +13,21 @@ pub struct ArtificialViscosity {
     pub beta: f64,
     /// Multiply Π_ij by the mean Balsara factor |∇·v| / (|∇·v| + |∇×v| + 10⁻⁴ c/h).
     pub balsara: bool,
+    /// Measure the approach w_ij with the velocities relative to the circular orbit about the
+    /// central mass at each particle's position, v − v_c(x) (needs `[gravity]`).
+    ///
+    /// A Keplerian disk shears: half its neighbour pairs approach, and the usual Π_ij turns
+    /// that shear into an effective viscosity α_SS ≈ 0.06 α h/H that spreads the disk
+    /// (Meru & Bate 2012), while with α = 0 the particle noise that shear creates is never
+    /// damped and grows from the disk's edges (the SPH pressure force's zeroth-order error
+    /// feeds it; Raskin & Owen 2016 find the same). Measured in the frame of the orbits, the
+    /// shear of a circular flow is no approach at all: Π_ij acts only on departures from
+    /// circular orbits (epicycles, noise, shocks), in the spirit of Cartwright & Stamatellos
+    /// (2010, A&A 516, A99), who switch AV on only where neighbours are not on Keplerian
+    /// orbits about the same point. Π_ij stays symmetric in i, j and along r_ij, so linear
+    /// and angular momentum are conserved as before; the pair's heating ½ Π_ij v_ij·∇_i W_ij
+    /// uses the true velocities, so total energy is conserved exactly too.
+    pub orbital: bool,
 }
 
 impl Default for ArtificialViscosity {
@@ -20,6 +36,7 @@ impl Default for ArtificialViscosity {
             alpha: 0.0,
             beta: 0.0,
             balsara: false,
+            orbital: false,
         }
     }
 }
@@ -31,6 +48,7 @@ impl ArtificialViscosity {
             alpha: 1.0,
             beta: 2.0,
             balsara: false,
+            orbital: false,
         }
     }
 
@@ -76,6 +94,35 @@ impl ArtificialViscosity {
     }
 }
 
+/// The velocity the artificial viscosity measures at position `x` with velocity `v`: `v`
+/// itself, or (with `orbital` and a central mass) v − v_c, with v_c the circular velocity
+/// √(R g_R) in the azimuthal direction about the z axis (2D: the plane's normal).
+#[inline]
+pub fn av_velocity<const D: usize>(
+    av: &ArtificialViscosity,
+    gravity: Option<&crate::physics::gravity::PointMass>,
+    x: &[f64; D],
+    v: [f64; D],
+) -> [f64; D] {
+    match gravity {
+        Some(g) if av.orbital && D >= 2 => {
+            let a = g.acceleration(x);
+            let r = x[0].hypot(x[1]);
+            if r == 0.0 {
+                return v;
+            }
+            // g_R = −(x a_x + y a_y)/R; v_c = √(R g_R) φ̂, φ̂ = (−y, x)/R.
+            let g_r = -(x[0] * a[0] + x[1] * a[1]) / r;
+            let vc = (r * g_r).max(0.0).sqrt() / r;
+            let mut out = v;
+            out[0] += vc * x[1];
+            out[1] -= vc * x[0];
+            out
+        }
+        _ => v,
+    }
+}
+
 /// Balsara's switch from the velocity gradient V_αβ (Eq. 10): near 1 in compression, near 0
 /// in pure shear.
 pub fn balsara_factor<const D: usize>(vgrad: &[[f64; D]; D], cs: f64, h: f64) -> f64 {
@@ -106,6 +153,56 @@ mod tests {
         assert!((vsig - 3.0).abs() < 1e-15);
         let (pi, vsig) = av.pi(0.5, 1.0, (1.0, 1.0), (1.0, 1.0), 1.0);
         assert_eq!((pi, vsig), (0.0, 2.0));
+    }
+
+    #[test]
+    fn orbital_frame_sees_no_approach_in_keplerian_shear() {
+        // Two particles on circular Keplerian orbits (GM = 1) at R = 1 and 1.05, the inner one
+        // 0.04 behind in azimuth: it catches up, so the shear makes them approach in the inertial frame (Π > 0), but relative
+        // to their circular orbits both are at rest (Π = 0). An epicyclic radial kick is
+        // still seen in full.
+        let g = crate::physics::gravity::PointMass {
+            gm: 1.0,
+            softening: 0.0,
+            accretion_radius: None,
+        };
+        let at = |r: f64, phi: f64, kick: f64| -> ([f64; 2], [f64; 2]) {
+            let (s, c) = phi.sin_cos();
+            let v = r.powf(-0.5);
+            ([r * c, r * s], [-v * s + kick * c, v * c + kick * s])
+        };
+        let (xi, vi) = at(1.0, 0.0, 0.0);
+        let (xj, vj) = at(1.05, 0.04, 0.0);
+        let dx = [xi[0] - xj[0], xi[1] - xj[1]];
+        let r = dx[0].hypot(dx[1]);
+        let approach = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]) * dx[0] + (a[1] - b[1]) * dx[1];
+        let mut av = ArtificialViscosity::for_shocks();
+        assert!(
+            approach(vi, vj) < 0.0,
+            "the shear closes the pair in the inertial frame"
+        );
+        assert!(av.pi(approach(vi, vj), r, (0.1, 0.1), (1.0, 1.0), 1.0).0 > 0.0);
+        av.orbital = true;
+        let (wi, wj) = (
+            av_velocity(&av, Some(&g), &xi, vi),
+            av_velocity(&av, Some(&g), &xj, vj),
+        );
+        assert!(
+            wi.iter().chain(&wj).all(|c| c.abs() < 1e-15),
+            "{wi:?} {wj:?}"
+        );
+        // Round-off only: the inertial frame's Π is ~10⁻³.
+        let inertial = av.pi(approach(vi, vj), r, (0.1, 0.1), (1.0, 1.0), 1.0).0;
+        let orbital = av.pi(approach(wi, wj), r, (0.1, 0.1), (1.0, 1.0), 1.0).0;
+        assert!(orbital < 1e-12 * inertial, "{orbital} against {inertial}");
+        // A radial kick of j (an epicycle) is what the orbital frame sees, in full.
+        let (_, vk) = at(1.05, 0.04, -0.05);
+        let wk = av_velocity(&av, Some(&g), &xj, vk);
+        let (s, c) = 0.04f64.sin_cos();
+        assert!((wk[0] + 0.05 * c).abs() < 1e-15 && (wk[1] + 0.05 * s).abs() < 1e-15);
+        assert!(av.pi(approach(wi, wk), r, (0.1, 0.1), (1.0, 1.0), 1.0).0 > 0.0);
+        // Without a central mass the option changes nothing.
+        assert_eq!(av_velocity(&av, None, &xi, vi), vi);
     }
 
     #[test]

@@ -31,6 +31,11 @@ pub fn gradient_pair<const D: usize>(
 #[derive(Clone, Copy, Debug)]
 pub struct ForceSide<const D: usize> {
     pub v: [f64; D],
+    /// The velocity the artificial viscosity measures ([`av_velocity`]): `v`, or `v`
+    /// relative to the circular orbit at the particle's position.
+    ///
+    /// [`av_velocity`]: crate::physics::artificial_viscosity::av_velocity
+    pub v_av: [f64; D],
     pub rho: f64,
     pub p: f64,
     pub cs: f64,
@@ -88,8 +93,12 @@ pub fn force_pair<const D: usize>(
         vdotr += (i.v[d] - j.v[d]) * dx[d];
     }
     let pterm = (i.p + j.p) / (i.rho * j.rho);
+    let mut vdotr_av = 0.0;
+    for d in 0..D {
+        vdotr_av += (i.v_av[d] - j.v_av[d]) * dx[d];
+    }
     let (pi, vsig) = av.pi(
-        vdotr,
+        vdotr_av,
         r,
         (i.cs, j.cs),
         (i.rho, j.rho),
@@ -134,6 +143,7 @@ mod tests {
     fn side(v: [f64; 2], rho: f64, p: f64, stress: [[f64; 2]; 2]) -> ForceSide<2> {
         ForceSide {
             v,
+            v_av: v,
             rho,
             p,
             cs: 1.0,

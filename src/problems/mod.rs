@@ -139,7 +139,7 @@ pub fn errors<const D: usize>(
         ProblemKind::Advection => advection::errors(cfg, p, bx, t),
         ProblemKind::Sedov => sedov::errors(cfg, p, h, t),
         ProblemKind::Ring => ring::errors(cfg, p, t),
-        ProblemKind::Disk => disk::errors(cfg, p),
+        ProblemKind::Disk => disk::errors(cfg, p, t),
         ProblemKind::File => Ok(BTreeMap::new()),
     }
 }

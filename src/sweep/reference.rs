@@ -4,6 +4,7 @@
 
 use crate::boundary::{BoundaryKind, SimBox};
 use crate::particles::Particles;
+use crate::physics::artificial_viscosity::av_velocity;
 use crate::physics::artificial_viscosity::balsara_factor;
 use crate::physics::eos::cylindrical_radius;
 use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
@@ -128,6 +129,12 @@ pub fn full_list_minimum_image<const D: usize>(
         .collect();
     let side = |parts: &Particles<D>, k: usize| ForceSide {
         v: parts.velocity(k),
+        v_av: av_velocity(
+            &phys.av,
+            phys.gravity.as_ref(),
+            &parts.position(k),
+            parts.velocity(k),
+        ),
         rho: parts.rho[k],
         p: parts.p[k],
         cs: parts.cs[k],
