@@ -22,7 +22,7 @@ use crate::io::hdf5::{RunMetadata, read_snapshot, write_snapshot};
 use crate::io::log::RunLog;
 use crate::io::snapshot::{PointMassRecord, Snapshot};
 use crate::io::summary::{AccretionLedger, Conservation, Summary, TotalsRecord, peak_rss_bytes};
-use crate::kernel::{KERNEL_NAME, Kernel};
+use crate::kernel::KERNEL_NAME;
 use crate::particles::Particles;
 use crate::problems::{self, InitialState};
 use crate::sweep::{Physics, SweepStats, Window};
@@ -274,13 +274,7 @@ struct Run<const D: usize> {
 
 impl<const D: usize> Run<D> {
     fn new(cfg: Config, p: Particles<D>, st: LoopState, bx: SimBox<D>) -> Self {
-        let phys = Physics {
-            kernel: Kernel::<D>::new(st.h),
-            eos: cfg.eos,
-            av: cfg.artificial_viscosity,
-            viscosity: cfg.viscosity,
-            gravity: cfg.gravity,
-        };
+        let phys = Physics::from_config(&cfg, st.h);
         let window = match cfg.sweep.window {
             WindowKind::Sweep => Window::Sweep,
             WindowKind::Full => Window::FullList,

@@ -284,13 +284,7 @@ fn balance_with_sph_forces<const D: usize>(
     dr: f64,
 ) {
     let Some(gravity) = cfg.gravity else { return };
-    let phys = crate::sweep::Physics {
-        kernel: crate::kernel::Kernel::<D>::new(h),
-        eos: cfg.eos,
-        av: cfg.artificial_viscosity,
-        viscosity: cfg.viscosity,
-        gravity: Some(gravity),
-    };
+    let phys = crate::sweep::Physics::<D>::from_config(cfg, h);
     let window = crate::sweep::Window::Sweep;
     let mean = |g: &Group, f: &dyn Fn(usize) -> f64| -> f64 {
         g.members.clone().map(f).sum::<f64>() / g.members.len() as f64

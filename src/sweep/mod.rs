@@ -39,6 +39,17 @@ pub struct Physics<const D: usize> {
 }
 
 impl<const D: usize> Physics<D> {
+    /// Everything a problem file switches on, with smoothing length `h`.
+    pub fn from_config(cfg: &crate::config::Config, h: f64) -> Self {
+        Self {
+            kernel: Kernel::<D>::new(h),
+            eos: cfg.eos,
+            av: cfg.artificial_viscosity,
+            viscosity: cfg.viscosity,
+            gravity: cfg.gravity,
+        }
+    }
+
     /// Hydrodynamics only: no physical viscosity, no gravity.
     pub fn hydro(kernel: Kernel<D>, eos: Eos, av: ArtificialViscosity) -> Self {
         Self {
