@@ -72,6 +72,13 @@ fn ring_after_one_step_is_the_same_on_2_3_and_4_ranks() {
 }
 
 #[test]
+fn disk_with_orbital_artificial_viscosity_after_one_step_is_the_same_on_2_3_and_4_ranks() {
+    // Guards the orbital-frame AV velocities of copies from other ranks, with gravity, α
+    // viscosity and the balanced set-up.
+    one_step::<3>("disk3d.toml", &["particles.n=5"]);
+}
+
+#[test]
 fn blast_3d_after_one_step_is_the_same_on_2_3_and_4_ranks() {
     one_step::<3>("sedov.toml", &["particles.n=16"]);
 }

@@ -344,7 +344,7 @@ pub fn errors<const D: usize>(
 ) -> Result<BTreeMap<String, f64>> {
     let start = setup::<D>(cfg)?.particles;
     let prof = Profile::new(cfg)?;
-    let dp = params(cfg);
+    let dp = &prof.dp;
     let quantiles = |q: &Particles<D>| -> [f64; 3] {
         let mut rm: Vec<(f64, f64)> = (0..q.len())
             .map(|i| (q.pos[0][i].hypot(q.pos[1][i]), q.mass[i]))
@@ -376,7 +376,7 @@ pub fn errors<const D: usize>(
     let cell = prof.dr / 20.0;
     let r_top = prof.radii[prof.radii.len() - 1] * 1.5 + 4.0 * prof.dr;
     // Cell edges on r_in + j cell, so that the rings' annuli are whole cells.
-    let r0 = prof.dp.r_in - (prof.dp.r_in / cell).floor() * cell;
+    let r0 = dp.r_in - (dp.r_in / cell).floor() * cell;
     let grid: Vec<f64> = (0..((r_top - r0) / cell).ceil() as usize)
         .map(|k| r0 + (k as f64 + 0.5) * cell)
         .collect();
@@ -405,7 +405,7 @@ pub fn errors<const D: usize>(
     // the annulus's mass; the annuli's edges fall between rings, so that at the start each
     // ring lies wholly in one.
     let width = 2.0 * prof.dr;
-    let offset = (prof.dp.r_in / width).ceil() * width - prof.dp.r_in;
+    let offset = (dp.r_in / width).ceil() * width - dp.r_in;
     let bins = ((r_top + offset) / width).ceil() as usize + 1;
     let bin = |r: f64| (((r + offset) / width) as usize).min(bins - 1);
     let mut mass_in = vec![0.0; bins];
@@ -420,7 +420,7 @@ pub fn errors<const D: usize>(
         pred_in[k] += ring * sigma_t[c];
         start_in[k] += ring * sigma0[c];
     }
-    let total = prof.dp.mass;
+    let total = dp.mass;
     let l1 = |reference: &[f64]| -> f64 {
         mass_in
             .iter()

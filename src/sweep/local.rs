@@ -201,6 +201,10 @@ pub struct Local<const D: usize> {
     pub vel: [Vec<f64>; D],
     pub mass: Vec<f64>,
     pub u: Vec<f64>,
+    /// The velocity the artificial viscosity measures, relative to circular orbits
+    /// (`artificial_viscosity.orbital`; set once at the start of the sweep); empty when the
+    /// AV measures `vel` itself.
+    pub v_av: Vec<[f64; D]>,
     // Filled as the sweep finishes each stage of a slab (and copied to ghosts).
     pub rho: Vec<f64>,
     pub p: Vec<f64>,
@@ -264,6 +268,7 @@ impl<const D: usize> Local<D> {
             u: pick(&e.u),
             src,
             element: order,
+            v_av: Vec::new(),
             rho: vec![0.0; total],
             p: vec![0.0; total],
             cs: vec![0.0; total],

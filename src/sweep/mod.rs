@@ -16,10 +16,12 @@ pub mod reference;
 
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 use crate::boundary::SimBox;
 use crate::kernel::Kernel;
 use crate::particles::Particles;
-use crate::physics::artificial_viscosity::{ArtificialViscosity, balsara_factor};
+use crate::physics::artificial_viscosity::{ArtificialViscosity, av_velocity, balsara_factor};
 use crate::physics::eos::{Eos, cylindrical_radius};
 use crate::physics::gravity::PointMass;
 use crate::physics::viscosity::ViscosityModel;
@@ -249,6 +251,7 @@ pub fn sweep<const D: usize>(
     ex: &mut dyn Exchange<D>,
 ) -> (Vec<Work<D>>, SweepStats) {
     let clock = Instant::now();
+    set_av_velocities(local, phys);
     let mut work = vec![Work::<D>::default(); local.len()];
     let deps = Dependencies::new(local);
     let ns = local.num_slabs();
@@ -462,6 +465,27 @@ fn finish_slab<const D: usize>(
             }
             _ => {}
         }
+    }
+}
+
+/// With `artificial_viscosity.orbital`, every element's velocity relative to its circular
+/// orbit, once per evaluation (positions and velocities are fixed during it, copies
+/// included), rather than twice per pair.
+fn set_av_velocities<const D: usize>(local: &mut Local<D>, phys: &Physics<D>) {
+    local.v_av.clear();
+    if phys.av.orbital && phys.gravity.is_some() {
+        let v_av: Vec<[f64; D]> = (0..local.len())
+            .into_par_iter()
+            .map(|k| {
+                av_velocity(
+                    &phys.av,
+                    phys.gravity.as_ref(),
+                    &local.position(k),
+                    local.velocity(k),
+                )
+            })
+            .collect();
+        local.v_av = v_av;
     }
 }
 

@@ -6,7 +6,6 @@
 use rayon::prelude::*;
 
 use crate::kernel::Kernel;
-use crate::physics::artificial_viscosity::av_velocity;
 use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
 use crate::sweep::Physics;
 use crate::sweep::local::{Local, Work, class};
@@ -300,12 +299,11 @@ impl PairBlock {
     pub fn force<const D: usize>(&self, local: &Local<D>, phys: &Physics<D>, work: &mut [Work<D>]) {
         let side = |k: usize| ForceSide {
             v: local.velocity(k),
-            v_av: av_velocity(
-                &phys.av,
-                phys.gravity.as_ref(),
-                &std::array::from_fn(|d| local.pos[d][k]),
-                local.velocity(k),
-            ),
+            v_av: local
+                .v_av
+                .get(k)
+                .copied()
+                .unwrap_or_else(|| local.velocity(k)),
             rho: local.rho[k],
             p: local.p[k],
             cs: local.cs[k],

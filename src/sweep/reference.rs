@@ -4,8 +4,7 @@
 
 use crate::boundary::{BoundaryKind, SimBox};
 use crate::particles::Particles;
-use crate::physics::artificial_viscosity::av_velocity;
-use crate::physics::artificial_viscosity::balsara_factor;
+use crate::physics::artificial_viscosity::{av_velocity, balsara_factor};
 use crate::physics::eos::cylindrical_radius;
 use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
 use crate::sweep::Physics;
