@@ -147,6 +147,12 @@ enum AnalyseCommand {
         /// The run's output folder.
         run: PathBuf,
     },
+    /// A disk: its radii, Σ against the thin-disk diffusion equation, effective α,
+    /// thickness and radial velocity at each snapshot (disk_evolution.csv in the run folder).
+    Disk {
+        /// The run's output folder.
+        run: PathBuf,
+    },
     /// The shock tube: ρ, v, p, u against the exact Riemann solution at the final time
     /// (sod.png, sod_profile.csv in the run folder).
     Sod {
@@ -321,6 +327,31 @@ fn real_main(cli: Cli) -> Result<()> {
             for f in &report.files {
                 println!("wrote {}", f.display());
             }
+            Ok(())
+        }
+        Command::Analyse {
+            what: AnalyseCommand::Disk { run },
+        } => {
+            let report = sphdisk::analysis::disk_report::analyse_disk(&run)?;
+            println!(
+                "      t  r10 (pred)       r50 (pred)       r90 (pred)       Σ L1   α_eff   v_R/c_s"
+            );
+            for (t, e) in &report.rows {
+                let f = |k: &str| e.get(k).copied().unwrap_or(f64::NAN);
+                println!(
+                    "{t:7.2}  {:+.3} ({:+.3})  {:+.3} ({:+.3})  {:+.3} ({:+.3})  {:.3}  {:.4}  {:.3}",
+                    f("disk_r10_change"),
+                    f("disk_r10_predicted"),
+                    f("disk_r50_change"),
+                    f("disk_r50_predicted"),
+                    f("disk_r90_change"),
+                    f("disk_r90_predicted"),
+                    f("disk_sigma_l1"),
+                    f("disk_alpha_effective"),
+                    f("disk_vr_rms_over_cs"),
+                );
+            }
+            println!("wrote {}", report.file.display());
             Ok(())
         }
         Command::Analyse {

@@ -3,26 +3,53 @@
 //! relative to circular orbits): a 3D Keplerian disk keeps its shape, its noise stays small,
 //! and it moves towards what the thin-disk diffusion equation with its own ν(R) predicts.
 //!
-//! Known and open (issue 3): over 10 orbits the edges spread about 1.5× faster than ν
-//! predicts (BENCHMARKS.md); the radii bars below are loose enough for that.
+//! Known and open (issue 3): SPH adds numerical transport; at n = 10 over 10 orbits the
+//! disk spreads like α_eff ≈ 0.0135 instead of its 0.01 (BENCHMARKS.md); the bars below
+//! are loose enough for that.
 
 mod common;
 use common::{error, run_problem};
+use sphdisk::analysis::disk_report::analyse_disk;
 
 #[test]
 fn thin_disk_keeps_its_shape_and_follows_its_viscosity_for_four_orbits() {
-    // Coarse (11k particles, h = 0.12 against H = 0.1 at R = 1) and 4 orbits at the inner
-    // edge, to stay fast. Measured: rms radial velocity 0.09 c_s (before the orbital-frame
+    // Coarse (12k particles, h = 0.15 against H = 0.1 at R = 1) and 4 orbits at the inner
+    // edge, to stay fast. Measured: rms radial velocity 0.069 c_s (before the orbital-frame
     // artificial viscosity and the balanced start it was 0.2 c_s after 2 orbits and 1 c_s
-    // after 5, growing from the inner edge); thickness +4.4%; the radii enclosing 10, 50,
-    // 90% of the mass move by −1.8%, −1.7%, +4.3% where the diffusion equation predicts
+    // after 5, growing from the inner edge); thickness +1.4%; the radii enclosing 10, 50,
+    // 90% of the mass move by −2.0%, −1.1%, +3.3% where the diffusion equation predicts
     // −3.4%, +0.6%, +1.8%. At this resolution the rings' discreteness (one ring per
     // 0.1 = H) makes a few per cent of scatter; the bars allow it and fail for the old
     // growth, a missing pressure or viscous term, or a wrong vertical gravity (each moves
     // these by tens of per cent). The finer runs are in BENCHMARKS.md.
-    let r = run_problem::<3>("disk3d.toml", &["particles.n=6", "disk.orbits=4"]);
+    let r = run_problem::<3>(
+        "disk3d.toml",
+        &[
+            "particles.n=6",
+            "disk.orbits=4",
+            "output.interval=6.283185307179586",
+        ],
+    );
     let s = &r.summary;
     eprintln!("disk3d: {:?}", s.errors);
+    // `analyse disk` follows the same figures snapshot by snapshot (one per orbit); its last
+    // snapshot is the final state, where it must agree with summary.json.
+    let report = analyse_disk(r.dir.path()).expect("analysis runs");
+    assert_eq!(report.rows.len(), 4, "one row per orbit");
+    let (t_last, last) = report.rows.last().unwrap();
+    assert!(
+        (t_last - s.t_end).abs() < 1e-9,
+        "{t_last} against {}",
+        s.t_end
+    );
+    for (k, v) in last {
+        assert!(
+            (v - error(s, k)).abs() < 1e-9,
+            "{k}: {v} against {}",
+            error(s, k)
+        );
+    }
+    assert!(report.file.exists());
     assert!(error(s, "disk_vr_rms_over_cs") < 0.2);
     assert!(error(s, "disk_thickness_change") < 0.08);
     for q in ["r10", "r50", "r90"] {
@@ -34,8 +61,13 @@ fn thin_disk_keeps_its_shape_and_follows_its_viscosity_for_four_orbits() {
     }
     // Viscosity visibly moves the disk in 4 orbits (its edges are only ≈ H wide): the
     // particles' Σ moved 20% (L1, in annuli of 2 ring spacings) from the start and is
-    // closer to the prediction (16%) than to where it started.
+    // closer to the prediction (13%) than to where it started.
     assert!(error(s, "disk_sigma_l1") < error(s, "disk_sigma_l1_start"));
+    // The α whose diffusion fits the particles' Σ best: 0.023 measured against the 0.01
+    // given (coarse and early: 0.0135 at n = 10 after 10 orbits). The bar fails for a disk
+    // whose transport is 4× its viscosity's.
+    let alpha_eff = error(s, "disk_alpha_effective");
+    assert!(alpha_eff < 0.04, "α_eff = {alpha_eff}");
     assert!(
         r.particles.nu.iter().all(|&nu| nu > 0.0),
         "α viscosity is on"

@@ -2,6 +2,7 @@
 //! (error norms, binned profiles, front positions).
 
 pub mod advection;
+pub mod disk_report;
 pub mod riemann;
 pub mod ring;
 pub mod ring_report;

@@ -324,6 +324,30 @@ fn balance_with_sph_forces<const D: usize>(
 /// Passes of the vertical relaxation of the layers (3D).
 const VERTICAL_PASSES: usize = 12;
 
+/// Upper end of the search for `disk_alpha_effective` (or four times the disk's own α).
+const ALPHA_FIT_MAX: f64 = 0.05;
+/// Width of the bracket at which the search for `disk_alpha_effective` stops.
+const ALPHA_FIT_TOLERANCE: f64 = 2e-4;
+
+/// The minimum of a unimodal `f` on [`a`, `b`], to within `tol`, by golden-section search.
+fn golden_section_min(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    while b - a > tol {
+        if fc <= fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - g * (b - a);
+            fc = f(c);
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + g * (b - a);
+            fd = f(d);
+        }
+    }
+    0.5 * (a + b)
+}
+
 /// How far the disk left its initial equilibrium, against what its viscosity predicts:
 /// - `disk_r10_change`, `disk_r50_change`, `disk_r90_change`: the relative shifts of the radii
 ///   that enclose 10%, 50% and 90% of the mass (robust to the rings' epicyclic wobble), and
@@ -333,6 +357,9 @@ const VERTICAL_PASSES: usize = 12;
 /// - `disk_sigma_l1`: ∫|Σ − Σ_pred| 2πR dR / M of the particles' Σ in annuli of width 2 dr
 ///   against that prediction, beside `disk_sigma_l1_start`, the same against the initial Σ
 ///   (how far viscosity alone moved it);
+/// - `disk_alpha_effective`: the Shakura–Sunyaev α whose ν = α c_s H, in the same diffusion
+///   equation, brings the start closest to the particles' Σ (the physical α plus the
+///   numerical transport);
 /// - `disk_thickness_change` (3D): the relative change of the mass-weighted rms thickness
 ///   (a locally isothermal disk keeps H = c_s/Ω);
 /// - `disk_vr_rms_over_cs`: the mass-weighted rms radial velocity over the sound speed at r_in
@@ -342,7 +369,17 @@ pub fn errors<const D: usize>(
     p: &Particles<D>,
     t: f64,
 ) -> Result<BTreeMap<String, f64>> {
-    let start = setup::<D>(cfg)?.particles;
+    errors_from_start(cfg, &setup::<D>(cfg)?.particles, p, t)
+}
+
+/// [`errors`] with the initial particles `start` given (as [`setup`] makes them), for a
+/// series of states of one run.
+pub fn errors_from_start<const D: usize>(
+    cfg: &Config,
+    start: &Particles<D>,
+    p: &Particles<D>,
+    t: f64,
+) -> Result<BTreeMap<String, f64>> {
     let prof = Profile::new(cfg)?;
     let dp = &prof.dp;
     let quantiles = |q: &Particles<D>| -> [f64; 3] {
@@ -363,7 +400,7 @@ pub fn errors<const D: usize>(
         }
         out
     };
-    let (q0, q1) = (quantiles(&start), quantiles(p));
+    let (q0, q1) = (quantiles(start), quantiles(p));
     let mut e = BTreeMap::new();
     for (k, name) in ["disk_r10_change", "disk_r50_change", "disk_r90_change"]
         .iter()
@@ -431,6 +468,25 @@ pub fn errors<const D: usize>(
     };
     e.insert("disk_sigma_l1".to_string(), l1(&pred_in));
     e.insert("disk_sigma_l1_start".to_string(), l1(&start_in));
+    // The disk's total transport as one figure: the Shakura–Sunyaev α whose ν = α c_s H
+    // evolves the start closest (in the same L1) to the particles' Σ, found by golden-section
+    // search on [0, α_max]. Its excess over the α given is the numerical transport.
+    let cs = |r: f64| cfg.eos.pressure_sound_speed(1.0, 0.0, r).1;
+    let l1_alpha = |alpha: f64| -> f64 {
+        let nu = |r: f64| alpha * cs(r).powi(2) / (g.gm / r.powi(3)).sqrt();
+        let (sig, _) = viscous_disk::evolve(&grid, &sigma0, nu, t, g.accretion_radius);
+        let mut pred = vec![0.0; bins];
+        for (c, &r) in grid.iter().enumerate() {
+            pred[bin(r)] += std::f64::consts::TAU * r * cell * sig[c];
+        }
+        l1(&pred)
+    };
+    // (Only where the disk has a sound speed to scale ν with.)
+    if cs(dp.r_in) > 0.0 {
+        let alpha_max = (4.0 * cfg.viscosity.alpha.unwrap_or(0.0)).max(ALPHA_FIT_MAX);
+        let alpha_fit = golden_section_min(l1_alpha, 0.0, alpha_max, ALPHA_FIT_TOLERANCE);
+        e.insert("disk_alpha_effective".to_string(), alpha_fit);
+    }
     if D == 3 {
         let thickness = |q: &Particles<D>| {
             let mt: f64 = q.mass.iter().sum();
@@ -440,7 +496,7 @@ pub fn errors<const D: usize>(
                 / mt)
                 .sqrt()
         };
-        let (h0, h1) = (thickness(&start), thickness(p));
+        let (h0, h1) = (thickness(start), thickness(p));
         e.insert("disk_thickness_rms".to_string(), h1);
         e.insert("disk_thickness_change".to_string(), (h1 - h0).abs() / h0);
     }
@@ -460,4 +516,21 @@ pub fn errors<const D: usize>(
         .sum();
     e.insert("disk_vr_rms_over_cs".to_string(), (vr2 / mt).sqrt() / cs_in);
     Ok(e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Guards the search behind `disk_alpha_effective`: it finds an interior minimum and
+    /// one at either end of the bracket.
+    #[test]
+    fn golden_section_finds_the_minimum_inside_and_at_the_ends() {
+        let x = golden_section_min(|a| (a - 0.013).powi(2), 0.0, 0.05, 1e-6);
+        assert!((x - 0.013).abs() < 1e-6, "{x}");
+        let x = golden_section_min(|a| a, 0.0, 0.05, 1e-6);
+        assert!(x < 1e-6, "{x}");
+        let x = golden_section_min(|a| -a, 0.0, 0.05, 1e-6);
+        assert!(x > 0.05 - 1e-6, "{x}");
+    }
 }
