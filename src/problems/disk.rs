@@ -16,6 +16,7 @@ use crate::boundary::BoundaryKind;
 use crate::config::{Config, DiskParams};
 use crate::particles::Particles;
 use crate::physics::eos::Eos;
+use crate::physics::viscosity::ViscosityModel;
 use crate::problems::{InitialState, make_box, smoothing_length};
 
 fn params(cfg: &Config) -> DiskParams {
@@ -418,10 +419,8 @@ pub fn errors_from_start<const D: usize>(
         .map(|k| r0 + (k as f64 + 0.5) * cell)
         .collect();
     let sigma0: Vec<f64> = grid.iter().map(|&r| prof.sampled_sigma(r)).collect();
-    let nu = |r: f64| {
-        let cs = cfg.eos.pressure_sound_speed(1.0, 0.0, r).1;
-        cfg.viscosity.nu(cs, r, g.gm)
-    };
+    let cs = |r: f64| cfg.eos.pressure_sound_speed(1.0, 0.0, r).1;
+    let nu = |r: f64| cfg.viscosity.nu(cs(r), r, g.gm);
     let (sigma_t, _) = viscous_disk::evolve(&grid, &sigma0, nu, t, g.accretion_radius);
     let qs = [0.1, 0.5, 0.9];
     let (p0, p1) = (
@@ -449,14 +448,15 @@ pub fn errors_from_start<const D: usize>(
     for i in 0..p.len() {
         mass_in[bin(p.pos[0][i].hypot(p.pos[1][i]))] += p.mass[i];
     }
-    let mut pred_in = vec![0.0; bins];
-    let mut start_in = vec![0.0; bins];
-    for (c, &r) in grid.iter().enumerate() {
-        let k = bin(r);
-        let ring = std::f64::consts::TAU * r * cell;
-        pred_in[k] += ring * sigma_t[c];
-        start_in[k] += ring * sigma0[c];
-    }
+    // The annuli's masses of a Σ on the prediction's grid.
+    let annulus_masses = |sigma: &[f64]| -> Vec<f64> {
+        let mut m = vec![0.0; bins];
+        for (c, &r) in grid.iter().enumerate() {
+            m[bin(r)] += std::f64::consts::TAU * r * cell * sigma[c];
+        }
+        m
+    };
+    let (pred_in, start_in) = (annulus_masses(&sigma_t), annulus_masses(&sigma0));
     let total = dp.mass;
     let l1 = |reference: &[f64]| -> f64 {
         mass_in
@@ -471,15 +471,14 @@ pub fn errors_from_start<const D: usize>(
     // The disk's total transport as one figure: the Shakura–Sunyaev α whose ν = α c_s H
     // evolves the start closest (in the same L1) to the particles' Σ, found by golden-section
     // search on [0, α_max]. Its excess over the α given is the numerical transport.
-    let cs = |r: f64| cfg.eos.pressure_sound_speed(1.0, 0.0, r).1;
     let l1_alpha = |alpha: f64| -> f64 {
-        let nu = |r: f64| alpha * cs(r).powi(2) / (g.gm / r.powi(3)).sqrt();
+        let model = ViscosityModel {
+            alpha: Some(alpha),
+            ..ViscosityModel::default()
+        };
+        let nu = |r: f64| model.nu(cs(r), r, g.gm);
         let (sig, _) = viscous_disk::evolve(&grid, &sigma0, nu, t, g.accretion_radius);
-        let mut pred = vec![0.0; bins];
-        for (c, &r) in grid.iter().enumerate() {
-            pred[bin(r)] += std::f64::consts::TAU * r * cell * sig[c];
-        }
-        l1(&pred)
+        l1(&annulus_masses(&sig))
     };
     // (Only where the disk has a sound speed to scale ν with.)
     if cs(dp.r_in) > 0.0 {
