@@ -499,11 +499,7 @@ pub fn errors_from_start<const D: usize>(
         e.insert("disk_thickness_rms".to_string(), h1);
         e.insert("disk_thickness_change".to_string(), (h1 - h0).abs() / h0);
     }
-    let cs_in = cfg
-        .eos
-        .pressure_sound_speed(1.0, 0.0, dp.r_in)
-        .1
-        .max(f64::MIN_POSITIVE);
+    let cs_in = cs(dp.r_in).max(f64::MIN_POSITIVE);
     let mt: f64 = p.mass.iter().sum();
     let vr2: f64 = (0..p.len())
         .map(|i| {
