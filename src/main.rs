@@ -334,12 +334,12 @@ fn real_main(cli: Cli) -> Result<()> {
         } => {
             let report = sphdisk::analysis::disk_report::analyse_disk(&run)?;
             println!(
-                "      t  r10 (pred)       r50 (pred)       r90 (pred)       Σ L1   α_eff   v_R/c_s"
+                "      t  r10 (pred)       r50 (pred)       r90 (pred)       Σ L1   M(<R) L1  α_eff   v_R/c_s"
             );
             for (t, e) in &report.rows {
                 let f = |k: &str| e.get(k).copied().unwrap_or(f64::NAN);
                 println!(
-                    "{t:7.2}  {:+.3} ({:+.3})  {:+.3} ({:+.3})  {:+.3} ({:+.3})  {:.3}  {:.4}  {:.3}",
+                    "{t:7.2}  {:+.3} ({:+.3})  {:+.3} ({:+.3})  {:+.3} ({:+.3})  {:.3}  {:.4}    {:.4}  {:.3}",
                     f("disk_r10_change"),
                     f("disk_r10_predicted"),
                     f("disk_r50_change"),
@@ -347,6 +347,7 @@ fn real_main(cli: Cli) -> Result<()> {
                     f("disk_r90_change"),
                     f("disk_r90_predicted"),
                     f("disk_sigma_l1"),
+                    f("disk_enclosed_mass_l1"),
                     f("disk_alpha_effective"),
                     f("disk_vr_rms_over_cs"),
                 );

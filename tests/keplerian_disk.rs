@@ -3,9 +3,10 @@
 //! relative to circular orbits): a 3D Keplerian disk keeps its shape, its noise stays small,
 //! and it moves towards what the thin-disk diffusion equation with its own ν(R) predicts.
 //!
-//! Known and open (issue 3): SPH adds numerical transport; at n = 10 over 10 orbits the
-//! disk spreads like α_eff ≈ 0.0135 instead of its 0.01 (BENCHMARKS.md); the bars below
-//! are loose enough for that.
+//! The reference turns as the equilibrium does (pressure-supported at the edges). At the
+//! problem's resolution (n = 10) over its 10 orbits the radii enclosing 10/50/90% of the
+//! mass end within 0.4 points of the prediction and the disk spreads like α_eff = 0.0117
+//! for its α = 0.01 (BENCHMARKS.md); this test runs a coarser disk for 4 orbits.
 
 mod common;
 use common::{error, run_problem};
@@ -18,10 +19,11 @@ fn thin_disk_keeps_its_shape_and_follows_its_viscosity_for_four_orbits() {
     // artificial viscosity and the balanced start it was 0.2 c_s after 2 orbits and 1 c_s
     // after 5, growing from the inner edge); thickness +1.4%; the radii enclosing 10, 50,
     // 90% of the mass move by −2.0%, −1.1%, +3.3% where the diffusion equation predicts
-    // −3.4%, +0.6%, +1.8%. At this resolution the rings' discreteness (one ring per
-    // 0.1 = H) makes a few per cent of scatter; the bars allow it and fail for the old
-    // growth, a missing pressure or viscous term, or a wrong vertical gravity (each moves
-    // these by tens of per cent). The finer runs are in BENCHMARKS.md.
+    // −4.3%, +0.8%, +2.6%. At this resolution the rings' discreteness (one ring per
+    // 0.1 = H) and the disk's radial breathing (r50 swings by ±2% over the first orbits, in
+    // runs without viscosity too) make a few per cent of scatter; the bars allow it and fail
+    // for the old growth, a missing pressure or viscous term, or a wrong vertical gravity
+    // (each moves these by tens of per cent). The finer runs are in BENCHMARKS.md.
     let r = run_problem::<3>(
         "disk3d.toml",
         &[
@@ -57,17 +59,20 @@ fn thin_disk_keeps_its_shape_and_follows_its_viscosity_for_four_orbits() {
             error(s, &format!("disk_{q}_change")),
             error(s, &format!("disk_{q}_predicted")),
         );
-        assert!((got - want).abs() < 0.04, "{q}: {got} against {want}");
+        assert!((got - want).abs() < 0.03, "{q}: {got} against {want}");
     }
     // Viscosity visibly moves the disk in 4 orbits (its edges are only ≈ H wide): the
     // particles' Σ moved 20% (L1, in annuli of 2 ring spacings) from the start and is
-    // closer to the prediction (13%) than to where it started.
+    // closer to the prediction (13%) than to where it started; so are the enclosed masses
+    // M(<R) (measured 0.024 against the prediction, 0.044 against the start).
     assert!(error(s, "disk_sigma_l1") < error(s, "disk_sigma_l1_start"));
-    // The α whose diffusion fits the particles' Σ best: 0.023 measured against the 0.01
-    // given (coarse and early: 0.0135 at n = 10 after 10 orbits). The bar fails for a disk
-    // whose transport is 4× its viscosity's.
+    assert!(error(s, "disk_enclosed_mass_l1") < 0.75 * error(s, "disk_enclosed_mass_l1_start"));
+    // The α whose diffusion fits the particles' enclosed masses best: 0.0128 measured
+    // against the 0.01 given (0.0117 at n = 10 after 10 orbits; 0.005 there without
+    // viscosity). The upper bar, 1.6α, fails for a disk whose ν is doubled (α_eff ≈ 0.023)
+    // or whose numerical transport doubles; the lower, 0.5α, for one that hardly spreads.
     let alpha_eff = error(s, "disk_alpha_effective");
-    assert!(alpha_eff < 0.04, "α_eff = {alpha_eff}");
+    assert!((0.005..0.016).contains(&alpha_eff), "α_eff = {alpha_eff}");
     assert!(
         r.particles.nu.iter().all(|&nu| nu > 0.0),
         "α viscosity is on"

@@ -1,33 +1,78 @@
 //! The reference a viscous disk is measured against when ν is not constant: the
-//! axisymmetric thin-disk diffusion equation (Lynden-Bell & Pringle 1974; Pringle 1981)
+//! axisymmetric thin-disk diffusion equation for a disk whose specific angular momentum
+//! ℓ(R) = R² Ω(R) does not change in time (Lynden-Bell & Pringle 1974; Pringle 1981, Eq. 2.8):
 //!
-//! ∂Σ/∂t = (3/R) ∂/∂R [ R^(1/2) ∂/∂R (ν Σ R^(1/2)) ],
+//! ∂Σ/∂t = −(1/R) ∂/∂R [ (1/ℓ′) ∂/∂R (ν Σ R³ Ω′) ],   R³ Ω′ = R ℓ′ − 2ℓ,
 //!
-//! integrated numerically from a given Σ(R, 0) on a fine uniform grid (explicit, conservative
-//! fluxes between cells). With constant ν it reproduces the ring's exact solution
-//! (`analysis::ring`), which the unit test checks.
+//! which for Keplerian rotation, ℓ = √(GM R), is the familiar
+//! ∂Σ/∂t = (3/R) ∂/∂R [ R^(1/2) ∂/∂R (ν Σ R^(1/2)) ]. It is integrated numerically from a
+//! given Σ(R, 0) on a fine uniform grid (explicit, conservative fluxes between cells). With
+//! constant ν and Keplerian rotation it reproduces the ring's exact solution
+//! (`analysis::ring`), which the unit test checks. A pressure-supported disk turns slower
+//! than Keplerian where Σ falls outwards and faster where it rises (its edges), which changes
+//! both the shear that ν acts on and how far a torque moves the gas: [`Rotation::from_fn`]
+//! takes that rotation curve.
+
+/// The disk's rotation on the grid: ℓ′ = dℓ/dR on the cell faces, and the shear factor
+/// R³ Ω′ = R ℓ′ − 2ℓ at the cell centres (the viscous torque is 2π ν Σ R³ Ω′).
+#[derive(Clone, Debug)]
+pub struct Rotation {
+    shear: Vec<f64>,
+    dl_face: Vec<f64>,
+}
+
+impl Rotation {
+    /// Keplerian rotation about a mass with G M = `gm`: ℓ = √(GM R).
+    pub fn keplerian(r: &[f64], gm: f64) -> Self {
+        Self::from_fn(r, |x| (gm * x).sqrt())
+    }
+
+    /// The rotation curve ℓ(R) (rising outwards: a Rayleigh-stable disk), sampled on the
+    /// grid `r` with centred differences of a quarter cell.
+    pub fn from_fn(r: &[f64], ell: impl Fn(f64) -> f64) -> Self {
+        let dr = r[1] - r[0];
+        let eps = 0.25 * dr;
+        let slope = |x: f64| (ell(x + eps) - ell(x - eps)) / (2.0 * eps);
+        let shear = r.iter().map(|&x| x * slope(x) - 2.0 * ell(x)).collect();
+        let dl_face = r
+            .windows(2)
+            .map(|w| (ell(w[1]) - ell(w[0])) / (w[1] - w[0]))
+            .collect();
+        Self { shear, dl_face }
+    }
+}
 
 /// Σ(R) on a uniform grid of cell centres `r` (spacing `r[1] − r[0]`), evolved for a time
-/// `t` with viscosity `nu(R)`. No mass crosses the grid's ends; with `sink = Some(r_s)` the
-/// cells inside r_s are emptied after every step (an accretion radius), and the removed
-/// mass is returned beside Σ.
+/// `t` with viscosity `nu(R)` in a disk turning as `rotation`. No mass crosses the grid's
+/// ends; with `sink = Some(r_s)` the cells inside r_s are emptied after every step (an
+/// accretion radius), and the removed mass is returned beside Σ.
 pub fn evolve(
     r: &[f64],
     sigma0: &[f64],
     nu: impl Fn(f64) -> f64,
+    rotation: &Rotation,
     t: f64,
     sink: Option<f64>,
 ) -> (Vec<f64>, f64) {
     let n = r.len();
     assert!(n >= 3 && sigma0.len() == n, "grid and Σ must match");
+    assert!(
+        rotation.shear.len() == n && rotation.dl_face.iter().all(|&d| d > 0.0),
+        "the rotation must be sampled on this grid, with ℓ rising outwards"
+    );
     let dr = r[1] - r[0];
     let nu_c: Vec<f64> = r.iter().map(|&x| nu(x)).collect();
-    let sqrt_c: Vec<f64> = r.iter().map(|x| x.sqrt()).collect();
-    // Cell faces between k and k+1.
     let face: Vec<f64> = (0..n - 1).map(|k| 0.5 * (r[k] + r[k + 1])).collect();
-    let nu_max = nu_c.iter().cloned().fold(0.0, f64::max);
-    // Explicit stability: the diffusion coefficient of Σ is 3ν; a quarter of the limit.
-    let steps = ((t * 12.0 * nu_max / (dr * dr)).ceil() as usize).max(1);
+    // Explicit stability: Σ diffuses with the coefficient ν |R³ Ω′| / (R ℓ′) (3ν when
+    // Keplerian); a quarter of the limit.
+    let diffusivity = (0..n - 1)
+        .map(|k| {
+            let nu_f = nu_c[k].max(nu_c[k + 1]);
+            let shear = rotation.shear[k].abs().max(rotation.shear[k + 1].abs());
+            nu_f * shear / (face[k] * rotation.dl_face[k])
+        })
+        .fold(0.0, f64::max);
+    let steps = ((t * 4.0 * diffusivity / (dr * dr)).ceil() as usize).max(1);
     let dt = t / steps as f64;
     let mut s = sigma0.to_vec();
     let mut g = vec![0.0; n];
@@ -35,12 +80,13 @@ pub fn evolve(
     let mut accreted = 0.0;
     let cell_mass = |s: &[f64], k: usize| std::f64::consts::TAU * r[k] * dr * s[k];
     for _ in 0..steps {
+        // The torque 2π ν Σ R³ Ω′ at the cell centres.
         for k in 0..n {
-            g[k] = nu_c[k] * s[k] * sqrt_c[k];
+            g[k] = std::f64::consts::TAU * nu_c[k] * s[k] * rotation.shear[k];
         }
-        // Mass flux through each face: 2π R Σ v_R = 6π R^(1/2) ∂(ν Σ R^(1/2))/∂R.
+        // Mass flux inwards through each face: −2π R Σ v_R = −(∂G/∂R) / ℓ′.
         for k in 0..n - 1 {
-            flux[k] = 3.0 * std::f64::consts::TAU * face[k].sqrt() * (g[k + 1] - g[k]) / dr;
+            flux[k] = -(g[k + 1] - g[k]) / dr / rotation.dl_face[k];
         }
         for k in 0..n {
             let inflow =
@@ -103,7 +149,8 @@ mod tests {
         let t = |tau: f64| ring.time(tau);
         let r: Vec<f64> = (0..2000).map(|k| (k as f64 + 0.5) * 1.25e-3).collect();
         let s0: Vec<f64> = r.iter().map(|&x| ring.sigma(x, tau0)).collect();
-        let (s1, accreted) = evolve(&r, &s0, |_| nu, t(tau1) - t(tau0), None);
+        let kepler = Rotation::keplerian(&r, 1.0);
+        let (s1, accreted) = evolve(&r, &s0, |_| nu, &kepler, t(tau1) - t(tau0), None);
         assert_eq!(accreted, 0.0);
         let (mut num, mut den) = (0.0, 0.0);
         for (k, &x) in r.iter().enumerate() {
@@ -118,6 +165,66 @@ mod tests {
         assert!((mass(&s1) / mass(&s0) - 1.0).abs() < 1e-12);
     }
 
+    /// Guards the non-Keplerian form: the torque flux and the mass flux are built from the
+    /// same ℓ′, so the disk's angular momentum Σ m ℓ changes only by the torque at the
+    /// grid's ends (zero where Σ is), to round-off, whatever the rotation curve.
+    #[test]
+    fn a_pressure_supported_ring_conserves_mass_and_angular_momentum() {
+        let r: Vec<f64> = (0..800).map(|k| 0.2 + (k as f64 + 0.5) * 2.5e-3).collect();
+        let s0: Vec<f64> = r
+            .iter()
+            .map(|&x| (-(x - 1.0f64).powi(2) / 0.005).exp())
+            .collect();
+        // Faster than Keplerian inside R = 1 and slower outside, by up to 2% (ℓ′ > 0).
+        let ell = |x: f64| x.sqrt() * (1.0 - 0.02 * ((x - 1.0) / 0.1).tanh());
+        let rot = Rotation::from_fn(&r, ell);
+        let (s1, _) = evolve(&r, &s0, |_| 1e-3, &rot, 1.0, None);
+        let sum = |s: &[f64], f: &dyn Fn(f64) -> f64| -> f64 {
+            r.iter().zip(s).map(|(&x, s)| x * s * f(x)).sum()
+        };
+        let (m0, m1) = (sum(&s0, &|_| 1.0), sum(&s1, &|_| 1.0));
+        let (j0, j1) = (sum(&s0, &ell), sum(&s1, &ell));
+        assert!((m1 / m0 - 1.0).abs() < 1e-12, "mass {m0} → {m1}");
+        assert!(
+            (j1 / j0 - 1.0).abs() < 1e-12,
+            "angular momentum {j0} → {j1}"
+        );
+        // It spread: the rms width grew by more than 10%.
+        let width = |s: &[f64]| (sum(s, &|x| (x - 1.0).powi(2)) / sum(s, &|_| 1.0)).sqrt();
+        assert!(
+            width(&s1) > 1.1 * width(&s0),
+            "{} → {}",
+            width(&s0),
+            width(&s1)
+        );
+    }
+
+    /// Guards the pressure-supported reference of `problems/disk3d.toml`: a steeper fall of
+    /// Ω (a ring's outer side turning slower than Keplerian) shears more, so the same ν
+    /// spreads the ring further than with Keplerian rotation.
+    #[test]
+    fn sub_keplerian_outer_side_spreads_a_ring_faster() {
+        let r: Vec<f64> = (0..800).map(|k| 0.2 + (k as f64 + 0.5) * 2.5e-3).collect();
+        let s0: Vec<f64> = r
+            .iter()
+            .map(|&x| (-(x - 1.0f64).powi(2) / 0.005).exp())
+            .collect();
+        let width = |s: &[f64]| {
+            let m: f64 = r.iter().zip(s).map(|(x, s)| x * s).sum();
+            (r.iter()
+                .zip(s)
+                .map(|(x, s)| x * s * (x - 1.0).powi(2))
+                .sum::<f64>()
+                / m)
+                .sqrt()
+        };
+        let kepler = Rotation::keplerian(&r, 1.0);
+        let steeper = Rotation::from_fn(&r, |x| x.sqrt() * (1.0 - 0.02 * ((x - 1.0) / 0.1).tanh()));
+        let (a, _) = evolve(&r, &s0, |_| 1e-3, &kepler, 5.0, None);
+        let (b, _) = evolve(&r, &s0, |_| 1e-3, &steeper, 5.0, None);
+        assert!(width(&b) > width(&a), "{} vs {}", width(&b), width(&a));
+    }
+
     #[test]
     fn sink_takes_the_mass_that_reaches_it() {
         let r: Vec<f64> = (0..400).map(|k| (k as f64 + 0.5) * 5e-3).collect();
@@ -125,7 +232,14 @@ mod tests {
             .iter()
             .map(|&x| (-(x - 0.6f64).powi(2) / 0.01).exp())
             .collect();
-        let (s1, accreted) = evolve(&r, &s0, |_| 1e-3, 20.0, Some(0.3));
+        let (s1, accreted) = evolve(
+            &r,
+            &s0,
+            |_| 1e-3,
+            &Rotation::keplerian(&r, 1.0),
+            20.0,
+            Some(0.3),
+        );
         let mass = |s: &[f64]| {
             r.iter()
                 .zip(s)
