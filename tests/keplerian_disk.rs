@@ -17,7 +17,7 @@ fn thin_disk_keeps_its_shape_and_follows_its_viscosity_for_four_orbits() {
     // Coarse (12k particles, h = 0.15 against H = 0.1 at R = 1) and 4 orbits at the inner
     // edge, to stay fast. Measured: rms radial velocity 0.069 c_s (before the orbital-frame
     // artificial viscosity and the balanced start it was 0.2 c_s after 2 orbits and 1 c_s
-    // after 5, growing from the inner edge); thickness +1.4%; the radii enclosing 10, 50,
+    // after 5, growing from the inner edge); the radii enclosing 10, 50,
     // 90% of the mass move by −2.0%, −1.1%, +3.3% where the diffusion equation predicts
     // −4.3%, +0.8%, +2.6%. At this resolution the rings' discreteness (one ring per
     // 0.1 = H) and the disk's radial breathing (r50 swings by ±2% over the first orbits, in
@@ -53,7 +53,18 @@ fn thin_disk_keeps_its_shape_and_follows_its_viscosity_for_four_orbits() {
     }
     assert!(report.file.exists());
     assert!(error(s, "disk_vr_rms_over_cs") < 0.2);
-    assert!(error(s, "disk_thickness_change") < 0.08);
+    // No heating beyond the spreading's: the rms thickness grew 1.4% where moving the mass
+    // as the prediction does grows it 1.0% (mass moved outwards is thicker; at n = 10 after
+    // 10 orbits 2.7% against 2.3%). The bar fails for a disk whose layers puff up (the old
+    // 68% in 10 orbits) or collapse.
+    let (thick, thick_pred) = (
+        error(s, "disk_thickness_change"),
+        error(s, "disk_thickness_predicted"),
+    );
+    assert!(
+        (thick - thick_pred).abs() < 0.015,
+        "thickness {thick} against {thick_pred}"
+    );
     for q in ["r10", "r50", "r90"] {
         let (got, want) = (
             error(s, &format!("disk_{q}_change")),

@@ -22,23 +22,31 @@ pub struct Rotation {
 }
 
 impl Rotation {
-    /// Keplerian rotation about a mass with G M = `gm`: ℓ = √(GM R).
+    /// Keplerian rotation about a mass with G M = `gm` > 0: ℓ = √(GM R).
     pub fn keplerian(r: &[f64], gm: f64) -> Self {
-        Self::from_fn(r, |x| (gm * x).sqrt())
+        Self::from_fn(r, |x| (gm * x).sqrt()).expect("Keplerian ℓ rises outwards")
     }
 
-    /// The rotation curve ℓ(R) (rising outwards: a Rayleigh-stable disk), sampled on the
-    /// grid `r` with centred differences of a quarter cell.
-    pub fn from_fn(r: &[f64], ell: impl Fn(f64) -> f64) -> Self {
+    /// The rotation curve ℓ(R), sampled on the grid `r` with centred differences of a
+    /// quarter cell. It must rise outwards (a Rayleigh-stable disk): otherwise the error
+    /// names the first radius where it does not.
+    pub fn from_fn(r: &[f64], ell: impl Fn(f64) -> f64) -> Result<Self, String> {
         let dr = r[1] - r[0];
         let eps = 0.25 * dr;
         let slope = |x: f64| (ell(x + eps) - ell(x - eps)) / (2.0 * eps);
         let shear = r.iter().map(|&x| x * slope(x) - 2.0 * ell(x)).collect();
-        let dl_face = r
+        let dl_face: Vec<f64> = r
             .windows(2)
             .map(|w| (ell(w[1]) - ell(w[0])) / (w[1] - w[0]))
             .collect();
-        Self { shear, dl_face }
+        if let Some(k) = dl_face.iter().position(|&d| !(d > 0.0)) {
+            return Err(format!(
+                "the specific angular momentum R²Ω does not rise outwards at R = {:.4} \
+                 (Rayleigh-unstable rotation)",
+                0.5 * (r[k] + r[k + 1])
+            ));
+        }
+        Ok(Self { shear, dl_face })
     }
 }
 
@@ -57,8 +65,8 @@ pub fn evolve(
     let n = r.len();
     assert!(n >= 3 && sigma0.len() == n, "grid and Σ must match");
     assert!(
-        rotation.shear.len() == n && rotation.dl_face.iter().all(|&d| d > 0.0),
-        "the rotation must be sampled on this grid, with ℓ rising outwards"
+        rotation.shear.len() == n,
+        "the rotation must be sampled on this grid"
     );
     let dr = r[1] - r[0];
     let nu_c: Vec<f64> = r.iter().map(|&x| nu(x)).collect();
@@ -165,38 +173,52 @@ mod tests {
         assert!((mass(&s1) / mass(&s0) - 1.0).abs() < 1e-12);
     }
 
+    /// A narrow Gaussian ring at R = 1 on 800 cells from R = 0.2 to 2.2: (grid, Σ).
+    fn narrow_ring() -> (Vec<f64>, Vec<f64>) {
+        let r: Vec<f64> = (0..800).map(|k| 0.2 + (k as f64 + 0.5) * 2.5e-3).collect();
+        let s = r
+            .iter()
+            .map(|&x| (-(x - 1.0f64).powi(2) / 0.005).exp())
+            .collect();
+        (r, s)
+    }
+
+    /// ℓ(R) of a ring turning faster than Keplerian inside R = 1 and slower outside, by up
+    /// to 2% (ℓ′ > 0 still), as a pressure maximum does.
+    fn pressure_supported_ell(x: f64) -> f64 {
+        x.sqrt() * (1.0 - 0.02 * ((x - 1.0) / 0.1).tanh())
+    }
+
+    /// ∫ Σ f(R) R dR on the grid (up to the factor 2π dR).
+    fn moment(r: &[f64], s: &[f64], f: impl Fn(f64) -> f64) -> f64 {
+        r.iter().zip(s).map(|(&x, s)| x * s * f(x)).sum()
+    }
+
+    fn rms_width(r: &[f64], s: &[f64]) -> f64 {
+        (moment(r, s, |x| (x - 1.0).powi(2)) / moment(r, s, |_| 1.0)).sqrt()
+    }
+
     /// Guards the non-Keplerian form: the torque flux and the mass flux are built from the
     /// same ℓ′, so the disk's angular momentum Σ m ℓ changes only by the torque at the
     /// grid's ends (zero where Σ is), to round-off, whatever the rotation curve.
     #[test]
     fn a_pressure_supported_ring_conserves_mass_and_angular_momentum() {
-        let r: Vec<f64> = (0..800).map(|k| 0.2 + (k as f64 + 0.5) * 2.5e-3).collect();
-        let s0: Vec<f64> = r
-            .iter()
-            .map(|&x| (-(x - 1.0f64).powi(2) / 0.005).exp())
-            .collect();
-        // Faster than Keplerian inside R = 1 and slower outside, by up to 2% (ℓ′ > 0).
-        let ell = |x: f64| x.sqrt() * (1.0 - 0.02 * ((x - 1.0) / 0.1).tanh());
-        let rot = Rotation::from_fn(&r, ell);
+        let (r, s0) = narrow_ring();
+        let rot = Rotation::from_fn(&r, pressure_supported_ell).unwrap();
         let (s1, _) = evolve(&r, &s0, |_| 1e-3, &rot, 1.0, None);
-        let sum = |s: &[f64], f: &dyn Fn(f64) -> f64| -> f64 {
-            r.iter().zip(s).map(|(&x, s)| x * s * f(x)).sum()
-        };
-        let (m0, m1) = (sum(&s0, &|_| 1.0), sum(&s1, &|_| 1.0));
-        let (j0, j1) = (sum(&s0, &ell), sum(&s1, &ell));
+        let (m0, m1) = (moment(&r, &s0, |_| 1.0), moment(&r, &s1, |_| 1.0));
+        let (j0, j1) = (
+            moment(&r, &s0, pressure_supported_ell),
+            moment(&r, &s1, pressure_supported_ell),
+        );
         assert!((m1 / m0 - 1.0).abs() < 1e-12, "mass {m0} → {m1}");
         assert!(
             (j1 / j0 - 1.0).abs() < 1e-12,
             "angular momentum {j0} → {j1}"
         );
         // It spread: the rms width grew by more than 10%.
-        let width = |s: &[f64]| (sum(s, &|x| (x - 1.0).powi(2)) / sum(s, &|_| 1.0)).sqrt();
-        assert!(
-            width(&s1) > 1.1 * width(&s0),
-            "{} → {}",
-            width(&s0),
-            width(&s1)
-        );
+        let (w0, w1) = (rms_width(&r, &s0), rms_width(&r, &s1));
+        assert!(w1 > 1.1 * w0, "{w0} → {w1}");
     }
 
     /// Guards the pressure-supported reference of `problems/disk3d.toml`: a steeper fall of
@@ -204,25 +226,22 @@ mod tests {
     /// spreads the ring further than with Keplerian rotation.
     #[test]
     fn sub_keplerian_outer_side_spreads_a_ring_faster() {
-        let r: Vec<f64> = (0..800).map(|k| 0.2 + (k as f64 + 0.5) * 2.5e-3).collect();
-        let s0: Vec<f64> = r
-            .iter()
-            .map(|&x| (-(x - 1.0f64).powi(2) / 0.005).exp())
-            .collect();
-        let width = |s: &[f64]| {
-            let m: f64 = r.iter().zip(s).map(|(x, s)| x * s).sum();
-            (r.iter()
-                .zip(s)
-                .map(|(x, s)| x * s * (x - 1.0).powi(2))
-                .sum::<f64>()
-                / m)
-                .sqrt()
-        };
+        let (r, s0) = narrow_ring();
         let kepler = Rotation::keplerian(&r, 1.0);
-        let steeper = Rotation::from_fn(&r, |x| x.sqrt() * (1.0 - 0.02 * ((x - 1.0) / 0.1).tanh()));
+        let steeper = Rotation::from_fn(&r, pressure_supported_ell).unwrap();
         let (a, _) = evolve(&r, &s0, |_| 1e-3, &kepler, 5.0, None);
         let (b, _) = evolve(&r, &s0, |_| 1e-3, &steeper, 5.0, None);
-        assert!(width(&b) > width(&a), "{} vs {}", width(&b), width(&a));
+        let (wa, wb) = (rms_width(&r, &a), rms_width(&r, &b));
+        assert!(wb > wa, "{wb} vs {wa}");
+    }
+
+    #[test]
+    fn a_rotation_curve_falling_outwards_is_an_error() {
+        let (r, _) = narrow_ring();
+        let err = Rotation::from_fn(&r, |x| x.sqrt() * (1.0 - 0.2 * ((x - 1.0) / 0.1).tanh()))
+            .unwrap_err();
+        // ℓ′ = ℓ/2R − 2√R sech²((R − 1)/0.1) first turns negative at R ≈ 0.885.
+        assert!(err.contains("R = 0.88"), "{err}");
     }
 
     #[test]

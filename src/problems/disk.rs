@@ -426,8 +426,9 @@ fn golden_section_min(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) 
 /// - `disk_alpha_effective`: the Shakura–Sunyaev α whose ν = α c_s H, in the same diffusion
 ///   equation, brings the start closest to the particles in that enclosed-mass L1 (the
 ///   physical α plus the numerical transport);
-/// - `disk_thickness_change` (3D): the relative change of the mass-weighted rms thickness
-///   (a locally isothermal disk keeps H = c_s/Ω);
+/// - `disk_thickness_change` (3D): the relative change (its size) of the mass-weighted rms
+///   thickness (a locally isothermal disk keeps H = c_s/Ω), and `disk_thickness_predicted`,
+///   the change the prediction's spreading makes (mass moved outwards is thicker);
 /// - `disk_vr_rms_over_cs`: the mass-weighted rms radial velocity over the sound speed at r_in
 ///   (the prediction's is ν/R ~ 10⁻³ c_s).
 pub fn errors<const D: usize>(
@@ -484,11 +485,12 @@ pub fn errors_from_start<const D: usize>(
         .map(|k| r0 + (k as f64 + 0.5) * cell)
         .collect();
     let sigma0: Vec<f64> = grid.iter().map(|&r| prof.sampled_sigma(r)).collect();
-    let cs = |r: f64| cfg.eos.pressure_sound_speed(1.0, 0.0, r).1;
+    let eq = Equilibrium::<D>::new(cfg, &prof);
+    let cs = |r: f64| eq.cs(r);
     let nu = |r: f64| cfg.viscosity.nu(cs(r), r, g.gm);
     // The rotation ν acts on: the equilibrium's, pressure-supported at the edges.
-    let eq = Equilibrium::<D>::new(cfg, &prof);
-    let rotation = viscous_disk::Rotation::from_fn(&grid, |r| eq.specific_angular_momentum(r));
+    let rotation = viscous_disk::Rotation::from_fn(&grid, |r| eq.specific_angular_momentum(r))
+        .map_err(|e| anyhow::anyhow!("keys `disk`: the prediction's rotation curve: {e}"))?;
     let (sigma_t, accreted_t) =
         viscous_disk::evolve(&grid, &sigma0, nu, &rotation, t, g.accretion_radius);
     let qs = [0.1, 0.5, 0.9];
@@ -606,6 +608,21 @@ pub fn errors_from_start<const D: usize>(
         let (h0, h1) = (thickness(start), thickness(p));
         e.insert("disk_thickness_rms".to_string(), h1);
         e.insert("disk_thickness_change".to_string(), (h1 - h0).abs() / h0);
+        // What the spreading alone does to it: the mass-weighted rms of H(R) = c_s/Ω_K over
+        // the predicted Σ against the initial one (mass moved outwards is thicker).
+        let rms_h = |sigma: &[f64]| -> f64 {
+            let (mut mh, mut m) = (0.0, 0.0);
+            for (c, &r) in grid.iter().enumerate() {
+                let dm = r * sigma[c];
+                mh += dm * eq.scale_height(r).powi(2);
+                m += dm;
+            }
+            (mh / m).sqrt()
+        };
+        e.insert(
+            "disk_thickness_predicted".to_string(),
+            rms_h(&sigma_t) / rms_h(&sigma0) - 1.0,
+        );
     }
     let cs_in = cs(dp.r_in).max(f64::MIN_POSITIVE);
     let mt: f64 = p.mass.iter().sum();
