@@ -1,6 +1,6 @@
 //! The reference a viscous disk is measured against when ν is not constant: the
 //! axisymmetric thin-disk diffusion equation for a disk whose specific angular momentum
-//! ℓ(R) = R² Ω(R) does not change in time (Lynden-Bell & Pringle 1974; Pringle 1981, Eq. 2.8):
+//! ℓ(R) = R² Ω(R) does not change in time (Lynden-Bell & Pringle 1974; Pringle 1981, Section 2):
 //!
 //! ∂Σ/∂t = −(1/R) ∂/∂R [ (1/ℓ′) ∂/∂R (ν Σ R³ Ω′) ],   R³ Ω′ = R ℓ′ − 2ℓ,
 //!

@@ -423,6 +423,8 @@ fn golden_section_min(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) 
 ///   (how far viscosity alone moved it);
 /// - `disk_enclosed_mass_l1`: ∫|M(<R) − M_pred(<R)| dR / (M r_in), the enclosed masses
 ///   counting what was accreted (beside `disk_enclosed_mass_l1_start`, against the start);
+/// - `disk_accreted` and `disk_accreted_predicted`: the fraction of the disk's mass that
+///   reached the accretion radius, in the run and in the prediction;
 /// - `disk_alpha_effective`: the Shakura–Sunyaev α whose ν = α c_s H, in the same diffusion
 ///   equation, brings the start closest to the particles in that enclosed-mass L1 (the
 ///   physical α plus the numerical transport);
@@ -572,6 +574,9 @@ pub fn errors_from_start<const D: usize>(
         }
         sum / (total * dp.r_in)
     };
+    // The mass that reached the accretion radius, as a fraction of the disk's.
+    e.insert("disk_accreted".to_string(), accreted_particles / total);
+    e.insert("disk_accreted_predicted".to_string(), accreted_t / total);
     e.insert(
         "disk_enclosed_mass_l1".to_string(),
         enclosed_l1(&sigma_t, accreted_t),
