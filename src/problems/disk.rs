@@ -242,12 +242,10 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         );
     }
     let eq = Equilibrium::<D>::new(cfg, &prof);
-    let vphi = |r: f64, z: f64| eq.vphi(r, z);
-    let scale_height = |r: f64| eq.scale_height(r);
     let fine: Vec<f64> = (0..=2000)
         .map(|k| radii[0] + (radii[radii.len() - 1] - radii[0]) * k as f64 / 2000.0)
         .collect();
-    if let Some(&(r, k2)) = epicyclic_squared(&fine, |r| vphi(r, 0.0))
+    if let Some(&(r, k2)) = epicyclic_squared(&fine, |r| eq.vphi(r, 0.0))
         .iter()
         .find(|(_, k2)| *k2 < 0.0)
     {
@@ -266,7 +264,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         let layers: Vec<(f64, f64)> = if D == 2 {
             vec![(0.0, 1.0)]
         } else {
-            let h = scale_height(r);
+            let h = eq.scale_height(r);
             let nz = ((dp.layers_h * h / dr).ceil() as i64).max(1);
             let zs: Vec<f64> = (-nz..nz).map(|j| (j as f64 + 0.5) * dr).collect();
             let w: Vec<f64> = zs.iter().map(|z| (-z * z / (2.0 * h * h)).exp()).collect();
@@ -275,7 +273,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         };
         for &(z, wz) in &layers {
             let m = sigma(r) * std::f64::consts::TAU * r * dr / count as f64 * wz;
-            let vphi = vphi(r, z);
+            let vphi = eq.vphi(r, z);
             groups.push(Group {
                 r,
                 z,
@@ -428,7 +426,7 @@ fn golden_section_min(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) 
 /// - `disk_alpha_effective`: the Shakura–Sunyaev α whose ν = α c_s H, in the same diffusion
 ///   equation, brings the start closest to the particles in that enclosed-mass L1 (the
 ///   physical α plus the numerical transport);
-/// - `disk_thickness_change` (3D): the relative change (its size) of the mass-weighted rms
+/// - `disk_thickness_change` (3D): the relative change (signed) of the mass-weighted rms
 ///   thickness (a locally isothermal disk keeps H = c_s/Ω), and `disk_thickness_predicted`,
 ///   the change the prediction's spreading makes (mass moved outwards is thicker);
 /// - `disk_vr_rms_over_cs`: the mass-weighted rms radial velocity over the sound speed at r_in
@@ -612,7 +610,7 @@ pub fn errors_from_start<const D: usize>(
         };
         let (h0, h1) = (thickness(start), thickness(p));
         e.insert("disk_thickness_rms".to_string(), h1);
-        e.insert("disk_thickness_change".to_string(), (h1 - h0).abs() / h0);
+        e.insert("disk_thickness_change".to_string(), h1 / h0 - 1.0);
         // What the spreading alone does to it: the mass-weighted rms of H(R) = c_s/Ω_K over
         // the predicted Σ against the initial one (mass moved outwards is thicker).
         let rms_h = |sigma: &[f64]| -> f64 {
