@@ -8,8 +8,9 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 
+use crate::analysis::run_config;
 use crate::config::{Config, ProblemKind};
 use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot;
@@ -24,15 +25,7 @@ pub struct DiskReport {
 
 /// Reads `run.toml` and the snapshots of a disk run and writes `disk_evolution.csv`.
 pub fn analyse_disk(run: &Path) -> Result<DiskReport> {
-    let cfg = Config::load(&run.join("run.toml"), &[])
-        .with_context(|| format!("{}: the run's problem file (run.toml)", run.display()))?;
-    if cfg.problem.kind != ProblemKind::Disk {
-        bail!(
-            "{}: not a disk run (problem.kind = \"{}\")",
-            run.display(),
-            cfg.problem.kind.name()
-        );
-    }
+    let cfg = run_config(run, ProblemKind::Disk, "a disk run")?;
     match cfg.problem.dimension {
         2 => analyse::<2>(run, &cfg),
         3 => analyse::<3>(run, &cfg),

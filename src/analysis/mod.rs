@@ -10,7 +10,27 @@ pub mod sedov;
 pub mod sod_report;
 pub mod viscous_disk;
 
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+
+use crate::config::{Config, ProblemKind};
 use crate::particles::Particles;
+
+/// The problem file a run saved (`run.toml` in its folder), which must be of `kind`;
+/// `what` names that kind in the error ("a shock-tube run").
+pub fn run_config(run: &Path, kind: ProblemKind, what: &str) -> Result<Config> {
+    let cfg = Config::load(&run.join("run.toml"), &[])
+        .with_context(|| format!("{}: the run's problem file (run.toml)", run.display()))?;
+    if cfg.problem.kind != kind {
+        bail!(
+            "{}: not {what} (problem.kind = \"{}\")",
+            run.display(),
+            cfg.problem.kind.name()
+        );
+    }
+    Ok(cfg)
+}
 
 /// Volume-weighted L1 norm ∫|e| dV / ∫dV with particle volumes m/ρ.
 pub fn l1_norm<const D: usize>(p: &Particles<D>, err: impl Fn(usize) -> f64) -> f64 {

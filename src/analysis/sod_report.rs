@@ -5,9 +5,10 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 
-use crate::config::{Config, ProblemKind};
+use crate::analysis::run_config;
+use crate::config::ProblemKind;
 use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot;
 use crate::problems::sod::{params, solution};
@@ -15,15 +16,7 @@ use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
 
 /// Reads `run.toml` and `final.hdf5` of a shock-tube run and writes the plot and the CSV.
 pub fn analyse_sod(run: &Path) -> Result<Vec<PathBuf>> {
-    let cfg = Config::load(&run.join("run.toml"), &[])
-        .with_context(|| format!("{}: the run's problem file (run.toml)", run.display()))?;
-    if cfg.problem.kind != ProblemKind::Sod {
-        bail!(
-            "{}: not a shock-tube run (problem.kind = \"{}\")",
-            run.display(),
-            cfg.problem.kind.name()
-        );
-    }
+    let cfg = run_config(run, ProblemKind::Sod, "a shock-tube run")?;
     let snap = read_snapshot(&run.join("final.hdf5"))?;
     let s = params(&cfg);
     let sol = solution(&cfg)?;

@@ -449,16 +449,20 @@ pub fn errors_from_start<const D: usize>(
 ) -> Result<BTreeMap<String, f64>> {
     let prof = Profile::new(cfg)?;
     let dp = &prof.dp;
-    let quantiles = |q: &Particles<D>| -> [f64; 3] {
+    // Each particle's (cylindrical radius, mass), sorted outwards.
+    let by_radius = |q: &Particles<D>| -> Vec<(f64, f64)> {
         let mut rm: Vec<(f64, f64)> = (0..q.len())
             .map(|i| (q.pos[0][i].hypot(q.pos[1][i]), q.mass[i]))
             .collect();
         rm.sort_by(|a, b| a.0.total_cmp(&b.0));
+        rm
+    };
+    let quantiles = |rm: &[(f64, f64)]| -> [f64; 3] {
         let total: f64 = rm.iter().map(|x| x.1).sum();
         let mut out = [0.0; 3];
         let mut acc = 0.0;
         let mut k = 0;
-        for (r, m) in rm {
+        for &(r, m) in rm {
             acc += m;
             while k < 3 && acc >= [0.1, 0.5, 0.9][k] * total {
                 out[k] = r;
@@ -467,7 +471,8 @@ pub fn errors_from_start<const D: usize>(
         }
         out
     };
-    let (q0, q1) = (quantiles(start), quantiles(p));
+    let radii_mass = by_radius(p);
+    let (q0, q1) = (quantiles(&by_radius(start)), quantiles(&radii_mass));
     let mut e = BTreeMap::new();
     for (k, name) in ["disk_r10_change", "disk_r50_change", "disk_r90_change"]
         .iter()
@@ -545,10 +550,6 @@ pub fn errors_from_start<const D: usize>(
     // enclosed mass M(<R) (plus the mass accreted), ∫|ΔM| dR / (M r_in): an integral of Σ,
     // so that the rings' own structure (neighbouring annuli a few per cent above and below
     // the smooth profile, which dominates `disk_sigma_l1`) does not pull the fit.
-    let mut radii_mass: Vec<(f64, f64)> = (0..p.len())
-        .map(|i| (p.pos[0][i].hypot(p.pos[1][i]), p.mass[i]))
-        .collect();
-    radii_mass.sort_by(|a, b| a.0.total_cmp(&b.0));
     let accreted_particles = (total - p.mass.iter().sum::<f64>()).max(0.0);
     // The particles' enclosed mass at each cell's outer edge.
     let enclosed: Vec<f64> = {
