@@ -6,6 +6,7 @@ pub mod disk_report;
 pub mod riemann;
 pub mod ring;
 pub mod ring_report;
+pub mod roche;
 pub mod sedov;
 pub mod sod_report;
 pub mod viscous_disk;
