@@ -9,8 +9,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::boundary::BoundaryKind;
 use crate::physics::artificial_viscosity::ArtificialViscosity;
+use crate::physics::binary::BinaryParams;
 use crate::physics::eos::Eos;
 use crate::physics::gravity::PointMass;
+use crate::physics::l1_stream::StreamParams;
 use crate::physics::viscosity::ViscosityModel;
 
 /// A whole problem file. Every table rejects keys it does not know.
@@ -27,6 +29,12 @@ pub struct Config {
     pub viscosity: ViscosityModel,
     /// Central point mass: `gm`, optional `softening` and `accretion_radius`.
     pub gravity: Option<PointMass>,
+    /// A circular binary (accretor at the origin, donor on the left, turning frame):
+    /// `q`, or `m1_msun`, `m2_msun`, `period_days`; `accretor_radius`, `escape_radius`.
+    pub binary: Option<BinaryParams>,
+    /// Mass transfer through L1 (needs `[binary]`): `particles_per_orbit`,
+    /// `mass_per_orbit` or `mdot_msun_per_year`, `cs`, `start`, `stop`.
+    pub stream: Option<StreamParams>,
     #[serde(default)]
     pub boundary: BoundarySection,
     #[serde(default)]
@@ -62,6 +70,9 @@ pub enum ProblemKind {
     Disk,
     /// Particles read from a CSV file (`[initial] file`).
     File,
+    /// A cataclysmic variable: a Roche binary (`[binary]`) whose disk the L1 stream
+    /// (`[stream]`) builds.
+    Cv,
 }
 
 impl ProblemKind {
@@ -73,6 +84,7 @@ impl ProblemKind {
             ProblemKind::Ring => "ring",
             ProblemKind::Disk => "disk",
             ProblemKind::File => "file",
+            ProblemKind::Cv => "cv",
         }
     }
 }
@@ -173,6 +185,9 @@ pub struct OutputSection {
     pub checkpoint_steps: Option<u64>,
     /// Wall-clock seconds between checkpoints; default 600. The last two are kept.
     pub checkpoint_wall_seconds: Option<f64>,
+    /// Time between rows of a binary's `lightcurve.csv` and `monitor.csv`; default
+    /// P_orb / 50 = 2π/50.
+    pub lightcurve_interval: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -458,6 +473,23 @@ impl Config {
         Ok(cfg)
     }
 
+    /// The central point mass: `[gravity]`, or a binary's accretor.
+    pub fn central_mass(&self) -> Option<PointMass> {
+        self.gravity.or_else(|| {
+            self.binary
+                .as_ref()
+                .map(|b| crate::physics::binary::Binary::new(b).accretor())
+        })
+    }
+
+    /// The code units in cgs: `[units]`, or those a binary in physical values defines,
+    /// or 1.
+    pub fn units(&self) -> crate::io::hdf5::Units {
+        self.units
+            .or_else(|| self.binary.as_ref().and_then(|b| b.physical_units()))
+            .unwrap_or_default()
+    }
+
     pub fn dimension(&self) -> usize {
         self.problem.dimension
     }
@@ -498,7 +530,11 @@ impl Config {
         if let Some(f) = self.particles.h_factor {
             positive("particles.h_factor", f)?;
         }
-        if self.problem.kind != ProblemKind::File {
+        if self.problem.kind == ProblemKind::Cv {
+            if self.particles.h.is_none() {
+                bail!("key `particles.h`: missing (a cv problem runs at constant h in units of a)");
+            }
+        } else if self.problem.kind != ProblemKind::File {
             match self.particles.n {
                 None => bail!(
                     "key `particles.n`: missing (the resolution of problem kind `{}`)",
@@ -527,8 +563,26 @@ impl Config {
         if let Some(g) = &self.gravity {
             g.validate().map_err(|e| anyhow::anyhow!(e))?;
         }
+        if let Some(b) = &self.binary {
+            if self.gravity.is_some() {
+                bail!(
+                    "table `[gravity]`: a binary's accretor is the central mass; give [binary] alone"
+                );
+            }
+            b.validate(d).map_err(|e| anyhow::anyhow!(e))?;
+        }
+        match (&self.stream, &self.binary) {
+            (Some(s), Some(b)) => s
+                .validate(b.physical_units().is_some())
+                .map_err(|e| anyhow::anyhow!(e))?,
+            (Some(_), None) => bail!("table `[stream]`: mass transfer through L1 needs [binary]"),
+            _ => {}
+        }
+        if self.problem.kind == ProblemKind::Cv && self.binary.is_none() {
+            bail!("table `[binary]`: missing (problem.kind = \"cv\" needs q or the stars' masses)");
+        }
         self.viscosity
-            .validate(self.gravity.is_some())
+            .validate(self.gravity.is_some() || self.binary.is_some())
             .map_err(|e| anyhow::anyhow!(e))?;
         for (k, v) in [
             ("time.courant", self.time.courant),
@@ -545,6 +599,11 @@ impl Config {
             && !(i >= 0.0 && i.is_finite())
         {
             bail!("key `output.interval`: must be ≥ 0, got {i}");
+        }
+        if let Some(i) = self.output.lightcurve_interval
+            && !(i > 0.0 && i.is_finite())
+        {
+            bail!("key `output.lightcurve_interval`: must be > 0, got {i}");
         }
         if let Some(dom) = &self.domain {
             if dom.min.len() != d || dom.max.len() != d {

@@ -49,11 +49,19 @@ pub fn rhs<const D: usize>(
     stats
 }
 
-/// Adds the central point mass's acceleration, if there is one.
+/// Adds the central point mass's acceleration, if there is one, and a binary donor's.
 pub fn add_gravity<const D: usize>(p: &mut Particles<D>, phys: &Physics<D>) {
     if let Some(g) = &phys.gravity {
         for i in 0..p.len() {
             let a = g.acceleration(&p.position(i));
+            for d in 0..D {
+                p.acc[d][i] += a[d];
+            }
+        }
+    }
+    if let Some(b) = &phys.binary {
+        for i in 0..p.len() {
+            let a = b.donor_acceleration(&p.position(i));
             for d in 0..D {
                 p.acc[d][i] += a[d];
             }
@@ -131,6 +139,11 @@ pub fn kdk_step_with<const D: usize>(
     let evolve_u = phys.eos.evolves_energy();
     let half = 0.5 * dt;
     let n = p.len();
+    // In a binary's turning frame the kicks act on the inertial velocity (module doc of
+    // `physics::binary`): corotating → inertial here, back at the end of the step.
+    if let Some(b) = &phys.binary {
+        b.add_frame_velocity(&p.pos, &mut p.vel, 1.0);
+    }
     let mut v_half: [Vec<f64>; D] = std::array::from_fn(|_| Vec::with_capacity(n));
     for d in 0..D {
         for i in 0..n {
@@ -144,12 +157,19 @@ pub fn kdk_step_with<const D: usize>(
     } else {
         p.u.clone()
     };
+    if let Some(b) = &phys.binary {
+        // The straight drift was inertial: the frame turns on by Ω Δt under it.
+        b.turn(&mut p.pos, &mut [&mut v_half, &mut p.acc], dt);
+    }
     // Reflection flips the half-step velocity too: apply the walls to it.
     bx.enforce(&mut p.pos, &mut v_half);
     // Predict with the old accelerations, evaluate, correct with the new ones.
     half_kick(p, &v_half, &u_half, half, evolve_u);
     let stats = rhs(p);
     half_kick(p, &v_half, &u_half, half, evolve_u);
+    if let Some(b) = &phys.binary {
+        b.add_frame_velocity(&p.pos, &mut p.vel, -1.0);
+    }
     if evolve_u {
         // Pressure and sound speed from the corrected energy (density is unchanged).
         for i in 0..n {

@@ -21,9 +21,15 @@ use crate::io::csv::write_particles;
 use crate::io::hdf5::{RunMetadata, read_snapshot, write_snapshot};
 use crate::io::log::RunLog;
 use crate::io::snapshot::{PointMassRecord, Snapshot};
-use crate::io::summary::{AccretionLedger, Conservation, Summary, TotalsRecord, peak_rss_bytes};
+use crate::io::summary::{
+    AccretionLedger, Conservation, Flow, MassBudget, MassBudgetRecord, Summary, TotalsRecord,
+    peak_rss_bytes,
+};
+use crate::io::timeseries::{LIGHTCURVE_HEADER, MONITOR_HEADER, Series};
 use crate::kernel::KERNEL_NAME;
 use crate::particles::Particles;
+use crate::physics::l1_stream::InjectorState;
+use crate::physics::mass_transfer::MassTransfer;
 use crate::problems::{self, InitialState};
 use crate::sweep::{Physics, SweepStats, Window};
 
@@ -244,6 +250,15 @@ struct LoopState {
     ghosts: usize,
     /// Wall seconds spent before this process started (earlier parts of a resumed run).
     wall_before: f64,
+    /// A binary's L1 injector.
+    #[serde(default)]
+    injector: Option<InjectorState>,
+    /// A binary's mass budget.
+    #[serde(default)]
+    budget: MassBudget,
+    /// Time of the next row of the binary's time series.
+    #[serde(default)]
+    next_series: f64,
 }
 
 impl LoopState {
@@ -270,6 +285,8 @@ struct Run<const D: usize> {
     ctl: StepControl,
     evolve_u: bool,
     meta: RunMetadata,
+    /// A binary's sources and sinks (cv problems).
+    mt: Option<MassTransfer>,
 }
 
 impl<const D: usize> Run<D> {
@@ -287,11 +304,12 @@ impl<const D: usize> Run<D> {
         };
         let meta = RunMetadata {
             parameters: cfg.flattened(),
-            units: cfg.units.unwrap_or_default(),
+            units: cfg.units(),
             periodic: bx.kinds.iter().all(|k| *k == BoundaryKind::Periodic),
         };
         Self {
             evolve_u: cfg.eos.evolves_energy(),
+            mt: MassTransfer::from_config(&cfg),
             cfg,
             phys,
             bx,
@@ -493,7 +511,9 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
         pressure_equilibrium,
         t_end: problem_t_end,
         output_times,
+        injector,
     } = problems::setup::<D>(cfg)?;
+    let mut injector = injector;
     let particles = match &opts.from {
         None => particles,
         Some(path) => {
@@ -503,6 +523,12 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
             let state = InitialState::new(p, bx, h);
             problems::check_initial_state(&state)
                 .with_context(|| format!("--from {}", path.display()))?;
+            if let Some(inj) = &mut injector {
+                // New stream particles take ids after the file's.
+                inj.next_id = inj
+                    .next_id
+                    .max(state.particles.id.iter().max().map_or(0, |m| m + 1));
+            }
             state.particles
         }
     };
@@ -547,6 +573,9 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
         evaluations: 1,
         ghosts: 0,
         wall_before: 0.0,
+        injector,
+        budget: MassBudget::default(),
+        next_series: 0.0,
     };
     let mut run = Run::new(cfg.clone(), particles, st, bx);
     let mut stats = rhs(&mut run.p, &run.bx, &run.phys, run.window);
@@ -591,6 +620,22 @@ fn advance<const D: usize>(
     // The step a checkpoint was last written at (by this process).
     let mut ckpt_at: Option<u64> = None;
 
+    let mut series = match (&run.mt, root) {
+        (Some(_), true) => {
+            let fresh = run.st.steps == 0;
+            [
+                Series::open(
+                    &opts.out,
+                    "lightcurve.csv",
+                    LIGHTCURVE_HEADER,
+                    fresh,
+                    run.st.t,
+                )?,
+                Series::open(&opts.out, "monitor.csv", MONITOR_HEADER, fresh, run.st.t)?,
+            ]
+        }
+        _ => [Series::silent(), Series::silent()],
+    };
     let bar = progress_bar(opts.progress && root);
     while run.st.t < t_end * (1.0 - 1e-12) {
         let st = &mut run.st;
@@ -601,7 +646,11 @@ fn advance<const D: usize>(
                 st.t
             );
         }
-        let mut dt = [time_step(&run.p, st.h, &run.ctl, run.evolve_u)];
+        let mut dt = [time_step(&run.p, st.h, &run.ctl, run.evolve_u).min(
+            run.mt
+                .as_ref()
+                .map_or(f64::INFINITY, MassTransfer::max_step),
+        )];
         team.min(&mut dt);
         let [mut dt] = dt;
         if !(dt > 0.0 && dt.is_finite()) {
@@ -672,6 +721,10 @@ fn advance<const D: usize>(
                 st.prev = TotalsRecord::from(&global_totals(team, &run.p, gravity));
             }
         }
+        if let Some(mt) = &run.mt {
+            mass_transfer(mt, &mut run.p, &mut run.st, &run.phys, team)?;
+        }
+        let st = &mut run.st;
         if let Some(i) = run.p.u.iter().position(|u| !u.is_finite() || *u < 0.0) {
             bail!(
                 "particle {} has internal energy {} at t = {:.6} (step {}): reduce time.courant or time.energy",
@@ -682,6 +735,17 @@ fn advance<const D: usize>(
             );
         }
         let (t, steps) = (st.t, st.steps);
+        if let Some(mt) = &run.mt
+            && t >= run.st.next_series
+        {
+            let support = run.phys.kernel.support();
+            let every = run
+                .cfg
+                .output
+                .lightcurve_interval
+                .unwrap_or(std::f64::consts::TAU / 50.0);
+            write_series(mt, &run.p, &mut run.st, support, every, team, &mut series)?;
+        }
         team.between_steps(&mut run.p, steps, &mut log)?;
         let snap_due = lands && run.st.next_snap < run.st.out_times.len();
         let stop = opts.stop_after.is_some_and(|k| steps >= k) && t < t_end * (1.0 - 1e-12);
@@ -765,6 +829,77 @@ fn advance<const D: usize>(
     })
 }
 
+/// Between steps in a binary: the sinks on every rank, then the L1 stream's releases on
+/// rank 0 (migration takes them to the ranks that own their places).
+fn mass_transfer<const D: usize>(
+    mt: &MassTransfer,
+    p: &mut Particles<D>,
+    st: &mut LoopState,
+    phys: &crate::sweep::Physics<D>,
+    team: &mut dyn Team<D>,
+) -> Result<()> {
+    let mut delta = MassBudget::default();
+    mt.remove(p, &mut delta);
+    let mut v = delta.outflow_values();
+    team.sum(&mut v);
+    st.budget.add_outflow_values(&v);
+    if team.is_root()
+        && let Some(inj) = &mut st.injector
+    {
+        let gravity = |x: &[f64; D]| {
+            let mut a = phys.gravity.map_or([0.0; D], |g| g.acceleration(x));
+            if let Some(b) = &phys.binary {
+                let a2 = b.donor_acceleration(x);
+                for d in 0..D {
+                    a[d] += a2[d];
+                }
+            }
+            a
+        };
+        mt.inject(inj, p, st.t, &mut st.budget, gravity);
+    }
+    st.prev = TotalsRecord::from(&global_totals(team, p, phys.gravity.as_ref()));
+    Ok(())
+}
+
+/// A row of `lightcurve.csv` and `monitor.csv` (collective: sums over ranks; rank 0
+/// writes), and the time of the next.
+fn write_series<const D: usize>(
+    mt: &MassTransfer,
+    p: &Particles<D>,
+    st: &mut LoopState,
+    support: f64,
+    every: f64,
+    team: &mut dyn Team<D>,
+    series: &mut [Series; 2],
+) -> Result<()> {
+    let b = &mt.binary;
+    let mut hist = problems::cv::disk_histogram(b, p);
+    team.sum(&mut hist);
+    let r_disk = problems::cv::histogram_radius(&hist, 0.9);
+    let disk_mass: f64 = hist.iter().sum();
+    let l = problems::cv::luminosities(b, p, r_disk, support);
+    let mut v = vec![l[0], l[1], l[2], p.len() as f64, p.mass.iter().sum()];
+    team.sum(&mut v);
+    let orbit = st.t / std::f64::consts::TAU;
+    series[0].row(&[st.t, orbit, v[0] + v[1] + v[2], v[0], v[1], v[2]])?;
+    let f = &st.budget;
+    series[1].row(&[
+        st.t,
+        orbit,
+        v[3],
+        v[4],
+        disk_mass,
+        r_disk,
+        f.injected.mass,
+        f.accreted.mass,
+        f.returned.mass,
+        f.escaped.mass,
+    ])?;
+    st.next_series = ((st.t / every).floor() + 1.0) * every;
+    Ok(())
+}
+
 /// The final state, error norms and `summary.json` of a run that reached its end time.
 fn finish<const D: usize>(
     run: &Run<D>,
@@ -783,6 +918,10 @@ fn finish<const D: usize>(
     // Conservation counts what was accreted as still present.
     let mut with_accreted = totals_end;
     st.accreted.add_to(&mut with_accreted);
+    // A binary: what entered through L1 counts with the start, what left with the end.
+    let mut totals_start = totals_start;
+    totals_start.mass += st.budget.injected.mass;
+    with_accreted.mass += st.budget.mass_out();
     let (dm, dp, de) = with_accreted.drift_from(&totals_start);
     let l0 = totals_start.angular_momentum;
     let dl = (with_accreted.angular_momentum - l0).abs() / l0.abs().max(f64::MIN_POSITIVE);
@@ -824,11 +963,60 @@ fn finish<const D: usize>(
         accretion: gravity
             .and_then(|g| g.accretion_radius)
             .map(|_| st.accreted.clone()),
+        mass_budget: run.mt.map(|_| {
+            let b = &st.budget;
+            let start = st.totals_start.mass + b.injected.mass;
+            let present = Flow {
+                particles: n as u64,
+                mass: totals_end.mass,
+                angular_momentum: 0.0,
+            };
+            MassBudgetRecord {
+                flows: b.clone(),
+                present,
+                residual: (start - totals_end.mass - b.mass_out()) / start,
+            }
+        }),
+        binary: run.mt.map(|mt| binary_record(&mt, cfg)),
         ring,
         parallel,
     };
     summary.write(&out.join("summary.json"))?;
     Ok(summary)
+}
+
+/// A binary's geometry for `summary.json`: q, L1, the lobes, the stream's nozzle, the
+/// units, and the run's length in orbits (and days where physical).
+fn binary_record(mt: &MassTransfer, cfg: &Config) -> serde_json::Value {
+    use crate::analysis::roche;
+    let q = mt.binary.q;
+    let u = cfg.units();
+    let period_days = cfg.binary.and_then(|b| b.period_days);
+    let mut v = serde_json::json!({
+        "q": q,
+        "mu": mt.binary.mu,
+        "l1_distance": roche::l1_distance(q),
+        "r_circ_fit": roche::r_circ_fit(q),
+        "r_31": roche::r_31(q),
+        "tidal_radius": roche::tidal_radius(q),
+        "accretor_radius": mt.binary.accretor_radius,
+        "escape_radius": mt.binary.escape_radius,
+        "units_cgs": {"mass": u.mass_cgs, "length": u.length_cgs, "time": u.time_cgs},
+    });
+    if let Some(s) = &mt.stream {
+        let (sy, sz) = s.nozzle();
+        v["stream"] = serde_json::json!({
+            "particles_per_orbit": s.rate * std::f64::consts::TAU,
+            "particle_mass": s.particle_mass,
+            "cs": s.cs,
+            "nozzle_sigma_orbital_plane": sy,
+            "nozzle_sigma_vertical": sz,
+        });
+    }
+    if let Some(p) = period_days {
+        v["period_days"] = serde_json::json!(p);
+    }
+    v
 }
 
 /// Snapshots written so far, listed in `snapshots.json` (file, time, step) so that tools

@@ -733,6 +733,7 @@ mod tests {
                 bulk: 0.5,
             },
             gravity: None,
+            binary: None,
         }
     }
 

@@ -412,15 +412,7 @@ fn set_unit_attrs(ds: &mut hdf5_pure::DatasetBuilder, e: Exponents, units: Units
 /// Reads a snapshot: one file, or all parts of a multi-file snapshot when given `name.hdf5`
 /// whose parts are `name.k.hdf5` (or any one part, which names the others).
 pub fn read_snapshot(path: &Path) -> Result<Snapshot> {
-    let first = if path.exists() {
-        path.to_path_buf()
-    } else {
-        let p0 = part_paths(path, 2).remove(0);
-        if !p0.exists() {
-            bail!("cannot read snapshot {}: no such file", path.display());
-        }
-        p0
-    };
+    let first = first_file(path)?;
     let (mut snap, num_files, this_file) = read_one(&first)?;
     if num_files > 1 {
         // Find the base name from `stem.k.hdf5` and read the other parts in order.
@@ -447,6 +439,51 @@ pub fn read_snapshot(path: &Path) -> Result<Snapshot> {
         }
     }
     Ok(snap)
+}
+
+/// The file to open for the snapshot `path`: itself, or the first part `name.0.hdf5` of a
+/// multi-file snapshot named `name.hdf5`.
+fn first_file(path: &Path) -> Result<PathBuf> {
+    if path.exists() {
+        return Ok(path.to_path_buf());
+    }
+    let p0 = part_paths(path, 2).remove(0);
+    if !p0.exists() {
+        bail!("cannot read snapshot {}: no such file", path.display());
+    }
+    Ok(p0)
+}
+
+/// The problem file a snapshot was written with: the attributes of its `/Parameters` group,
+/// keyed as stored — `section:key` (SWIFT's convention; sphdisk writes the dotted keys of
+/// `Config::flattened` with the first `.` made a `:`, so `[binary] q` is `binary:q`) — with
+/// string values as they are and numeric ones printed. A file without the group (GADGET
+/// initial conditions) gives an empty map. Multi-file snapshots: as [`read_snapshot`], the
+/// parameters of the first part.
+pub fn read_parameters(path: &Path) -> Result<BTreeMap<String, String>> {
+    let first = first_file(path)?;
+    let what = first.display();
+    let bytes = std::fs::read(&first).with_context(|| format!("cannot read snapshot {what}"))?;
+    let file = File::from_bytes(bytes)
+        .map_err(|e| anyhow::anyhow!("{what} is not a readable HDF5 file: {e}"))?;
+    let Ok(group) = file.group("Parameters") else {
+        return Ok(BTreeMap::new());
+    };
+    let attrs = group
+        .attrs()
+        .map_err(|e| anyhow::anyhow!("{what}: cannot read /Parameters attributes: {e}"))?;
+    Ok(attrs
+        .iter()
+        .filter_map(|(k, v)| {
+            let text = match v {
+                AttrValue::AsciiString(s) | AttrValue::String(s) => s.clone(),
+                AttrValue::AsciiStringSized { value, .. }
+                | AttrValue::StringSized { value, .. } => value.clone(),
+                other => attr_f64(&HashMap::from([(k.clone(), other.clone())]), k)?.to_string(),
+            };
+            Some((k.clone(), text.trim_end_matches('\0').trim().to_string()))
+        })
+        .collect())
 }
 
 fn clear_particles(s: &mut Snapshot) {
@@ -752,6 +789,30 @@ mod tests {
         assert!((c / (2e33 / 4.9e21) - 1.0).abs() < 1e-12);
         let coords = f.dataset("PartType0/Coordinates").unwrap();
         assert_eq!(coords.shape().unwrap(), vec![10, 3]);
+    }
+
+    #[test]
+    fn parameters_read_back_as_section_colon_key() {
+        let dir = tempfile::tempdir().unwrap();
+        let base = dir.path().join("snap.hdf5");
+        let mut m = meta();
+        m.parameters
+            .insert("binary.q".to_string(), "0.15".to_string());
+        write_snapshot(&base, &sample(20, 3), &m, 2).unwrap();
+        // A multi-file snapshot by its base name: the first part's parameters.
+        let p = read_parameters(&base).unwrap();
+        assert_eq!(p.get("binary:q").map(String::as_str), Some("0.15"));
+        assert_eq!(p.get("problem:kind").map(String::as_str), Some("sod"));
+        assert_eq!(p.get("eos:gamma").map(String::as_str), Some("1.4"));
+        assert_eq!(p.len(), 3);
+        // No /Parameters group: nothing; no file: an error.
+        let mut fb = FileBuilder::new();
+        let h = fb.create_group("Header");
+        fb.add_group(h.finish());
+        let bare = dir.path().join("bare.hdf5");
+        std::fs::write(&bare, fb.finish().unwrap()).unwrap();
+        assert!(read_parameters(&bare).unwrap().is_empty());
+        assert!(read_parameters(&dir.path().join("nope.hdf5")).is_err());
     }
 
     #[test]

@@ -8,3 +8,4 @@ pub mod hdf5;
 pub mod log;
 pub mod snapshot;
 pub mod summary;
+pub mod timeseries;

@@ -40,6 +40,12 @@ pub struct Summary {
     /// What the central mass accreted (present when an accretion radius is set).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub accretion: Option<AccretionLedger>,
+    /// A binary's mass budget (injected, accreted, returned, escaped, present).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_budget: Option<MassBudgetRecord>,
+    /// A binary's geometry and figures (cv problems only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub binary: Option<serde_json::Value>,
     /// The spreading ring's parameters (ring problems only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ring: Option<crate::problems::ring::RingRecord>,
@@ -142,6 +148,78 @@ impl AccretionLedger {
         t.internal += self.internal_energy;
         t.potential += self.potential_energy;
     }
+}
+
+/// Particles, mass and angular momentum that crossed the simulation's edge one way.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct Flow {
+    pub particles: u64,
+    pub mass: f64,
+    /// z-component of the inertial angular momentum about the binary's centre of mass.
+    pub angular_momentum: f64,
+}
+
+impl Flow {
+    pub fn add(&mut self, mass: f64, angular_momentum: f64) {
+        self.particles += 1;
+        self.mass += mass;
+        self.angular_momentum += angular_momentum;
+    }
+
+    fn values(&self) -> [f64; 3] {
+        [self.particles as f64, self.mass, self.angular_momentum]
+    }
+
+    fn add_values(&mut self, v: &[f64]) {
+        self.particles += v[0] as u64;
+        self.mass += v[1];
+        self.angular_momentum += v[2];
+    }
+}
+
+/// A binary's mass budget: what the L1 stream brought in, and where it left (accreted by
+/// the white dwarf, returned into the donor's Roche lobe, escaped). With the particles still
+/// present it closes to round-off: injected = present + accreted + returned + escaped.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct MassBudget {
+    pub injected: Flow,
+    pub accreted: Flow,
+    pub returned: Flow,
+    pub escaped: Flow,
+}
+
+impl MassBudget {
+    /// The outflows as numbers, to be summed over ranks (the inflow is rank 0's alone).
+    pub fn outflow_values(&self) -> Vec<f64> {
+        [self.accreted, self.returned, self.escaped]
+            .iter()
+            .flat_map(|f| f.values())
+            .collect()
+    }
+
+    /// Adds outflows given as [`MassBudget::outflow_values`].
+    pub fn add_outflow_values(&mut self, v: &[f64]) {
+        self.accreted.add_values(&v[0..3]);
+        self.returned.add_values(&v[3..6]);
+        self.escaped.add_values(&v[6..9]);
+    }
+
+    /// Mass that left: accreted + returned + escaped.
+    pub fn mass_out(&self) -> f64 {
+        self.accreted.mass + self.returned.mass + self.escaped.mass
+    }
+}
+
+/// The budget as `summary.json` reports it, with the particles still present and the
+/// closure of the balance.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MassBudgetRecord {
+    #[serde(flatten)]
+    pub flows: MassBudget,
+    /// Mass (and count) of the particles present at the end.
+    pub present: Flow,
+    /// (injected + initial − present − out) / injected: round-off only.
+    pub residual: f64,
 }
 
 /// Relative drifts, end against start.

@@ -3,7 +3,10 @@
 //! and the fixed set of pair functions the sweep calls (`hydro`).
 
 pub mod artificial_viscosity;
+pub mod binary;
 pub mod eos;
 pub mod gravity;
 pub mod hydro;
+pub mod l1_stream;
+pub mod mass_transfer;
 pub mod viscosity;

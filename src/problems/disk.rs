@@ -311,6 +311,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         pressure_equilibrium: None,
         t_end: Some(dp.orbits * period),
         output_times: Vec::new(),
+        injector: None,
     })
 }
 

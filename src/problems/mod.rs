@@ -2,6 +2,7 @@
 //! problem file, and measures its error against its exact solution at the end.
 
 pub mod advection;
+pub mod cv;
 pub mod disk;
 pub mod file;
 pub mod lattice;
@@ -29,6 +30,8 @@ pub struct InitialState<const D: usize> {
     pub t_end: Option<f64>,
     /// Snapshot times the problem asks for, besides `output.interval`.
     pub output_times: Vec<f64>,
+    /// A binary's L1 injector after the set-up's own releases (cv problems).
+    pub injector: Option<crate::physics::l1_stream::InjectorState>,
 }
 
 impl<const D: usize> InitialState<D> {
@@ -41,6 +44,7 @@ impl<const D: usize> InitialState<D> {
             pressure_equilibrium: None,
             t_end: None,
             output_times: Vec::new(),
+            injector: None,
         }
     }
 }
@@ -81,6 +85,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         ProblemKind::Ring => ring::setup(cfg)?,
         ProblemKind::Disk => disk::setup(cfg)?,
         ProblemKind::File => file::setup(cfg)?,
+        ProblemKind::Cv => cv::setup(cfg)?,
     };
     check_initial_state(&state)?;
     Ok(state)
@@ -141,5 +146,6 @@ pub fn errors<const D: usize>(
         ProblemKind::Ring => ring::errors(cfg, p, t),
         ProblemKind::Disk => disk::errors(cfg, p, t),
         ProblemKind::File => Ok(BTreeMap::new()),
+        ProblemKind::Cv => cv::errors(cfg, p, h),
     }
 }

@@ -181,6 +181,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         pressure_equilibrium: None,
         t_end: Some(t_end),
         output_times,
+        injector: None,
     })
 }
 

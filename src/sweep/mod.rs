@@ -22,6 +22,7 @@ use crate::boundary::SimBox;
 use crate::kernel::Kernel;
 use crate::particles::Particles;
 use crate::physics::artificial_viscosity::{ArtificialViscosity, av_velocity, balsara_factor};
+use crate::physics::binary::Binary;
 use crate::physics::eos::{Eos, cylindrical_radius};
 use crate::physics::gravity::PointMass;
 use crate::physics::viscosity::ViscosityModel;
@@ -37,7 +38,10 @@ pub struct Physics<const D: usize> {
     /// Physical shear viscosity, Eqs. (8)–(10).
     pub viscosity: ViscosityModel,
     /// External central point mass (applied outside the sweep; ν = α c_s H needs its GM).
+    /// In a binary, the accretor.
     pub gravity: Option<PointMass>,
+    /// A binary: the donor's gravity, and the turning frame the integrator steps in.
+    pub binary: Option<Binary>,
 }
 
 impl<const D: usize> Physics<D> {
@@ -48,7 +52,8 @@ impl<const D: usize> Physics<D> {
             eos: cfg.eos,
             av: cfg.artificial_viscosity,
             viscosity: cfg.viscosity,
-            gravity: cfg.gravity,
+            gravity: cfg.central_mass(),
+            binary: cfg.binary.as_ref().map(Binary::new),
         }
     }
 
@@ -60,6 +65,7 @@ impl<const D: usize> Physics<D> {
             av,
             viscosity: ViscosityModel::default(),
             gravity: None,
+            binary: None,
         }
     }
 }

@@ -1,0 +1,69 @@
+//! Time series written during a run, a row at a time (FargoCPT's monitor files, Phantom's
+//! `.ev`): for a binary, `lightcurve.csv` (the luminosity L = Σ mᵢ ε̇ᵢ of the dissipated
+//! energy, split into disk, stream and bright-spot regions) and `monitor.csv` (the disk's
+//! radius and mass, and the mass budget). Rows are appended and flushed at once; a resumed
+//! run first drops the rows written after its checkpoint, so the files continue as if the
+//! run had never stopped.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+/// One CSV file with a fixed header, appended row by row.
+pub struct Series {
+    path: PathBuf,
+    file: Option<std::fs::File>,
+}
+
+impl Series {
+    /// Opens `name` in `dir` for a run at time `t`: a new file with `header` when `fresh`,
+    /// otherwise the existing one without its rows later than `t` (first column).
+    pub fn open(dir: &Path, name: &str, header: &str, fresh: bool, t: f64) -> Result<Self> {
+        let path = dir.join(name);
+        let mut keep = format!("{header}\n");
+        if !fresh && let Ok(old) = std::fs::read_to_string(&path) {
+            for line in old.lines().skip(1) {
+                let first = line.split(',').next().and_then(|c| c.parse::<f64>().ok());
+                if first.is_some_and(|x| x <= t) {
+                    keep.push_str(line);
+                    keep.push('\n');
+                }
+            }
+        }
+        crate::io::atomic::write_atomic(&path, keep.as_bytes())?;
+        let file = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&path)
+            .with_context(|| format!("cannot open {}", path.display()))?;
+        Ok(Self {
+            path,
+            file: Some(file),
+        })
+    }
+
+    /// A series that writes nothing (ranks other than 0).
+    pub fn silent() -> Self {
+        Self {
+            path: PathBuf::new(),
+            file: None,
+        }
+    }
+
+    /// Appends one row of numbers (full precision).
+    pub fn row(&mut self, values: &[f64]) -> Result<()> {
+        let Some(f) = &mut self.file else {
+            return Ok(());
+        };
+        let line: Vec<String> = values.iter().map(|v| format!("{v:e}")).collect();
+        writeln!(f, "{}", line.join(","))
+            .and_then(|_| f.flush())
+            .with_context(|| format!("cannot write {}", self.path.display()))
+    }
+}
+
+/// Header of `lightcurve.csv`.
+pub const LIGHTCURVE_HEADER: &str = "t,orbit,l_total,l_disk,l_stream,l_spot";
+/// Header of `monitor.csv`.
+pub const MONITOR_HEADER: &str =
+    "t,orbit,particles,mass,disk_mass,r_disk,injected,accreted,returned,escaped";

@@ -1,0 +1,264 @@
+//! A cataclysmic variable (paper, Section 4): a Roche binary (`[binary]`) whose accretion
+//! disk is built by the gas stream from L1 (`[stream]`), at constant h. The run starts with
+//! the stream's first release; the box is open (particles leave through the binary's sinks,
+//! `physics::mass_transfer`), 2D in the orbital plane or 3D.
+//!
+//! Figures (`summary.json` `errors`): the stream's closest approach to the accretor r_min,
+//! its launch angle at L1 and its circularisation radius r_circ = j²/GM1 (j the specific
+//! angular momentum about the accretor at r_min), each beside the formula of
+//! exact-solutions.md 4b; and the disk's radius holding 90% of its mass and its mass.
+
+use std::collections::BTreeMap;
+
+use anyhow::{Result, bail};
+
+use crate::analysis::roche;
+use crate::boundary::BoundaryKind;
+use crate::config::Config;
+use crate::particles::Particles;
+use crate::physics::binary::{Binary, Region};
+use crate::physics::mass_transfer::MassTransfer;
+use crate::problems::{InitialState, make_box};
+
+/// The default box: the accretor's lobe, L1 and room for the stream and the overflow; the
+/// donor's lobe beyond L1 is a sink, so the box ends a little past L1.
+fn default_box<const D: usize>(q: f64) -> ([f64; D], [f64; D]) {
+    let d = roche::l1_distance(q);
+    let mut lo = [0.0; D];
+    let mut hi = [0.0; D];
+    lo[0] = -d - 0.1;
+    hi[0] = 0.7;
+    lo[1] = -0.7;
+    hi[1] = 0.7;
+    if D == 3 {
+        lo[2] = -0.3;
+        hi[2] = 0.3;
+    }
+    (lo, hi)
+}
+
+pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
+    let mt = MassTransfer::from_config(cfg).expect("validated: [binary] present");
+    if mt.stream.is_none() {
+        bail!("table `[stream]`: missing (a cv problem's gas comes through L1)");
+    }
+    let h = cfg.particles.h.expect("validated: particles.h present");
+    let (lo, hi) = default_box::<D>(mt.binary.q);
+    let bx = make_box(cfg, lo, hi, [BoundaryKind::Open; D]);
+    let l1 = roche::l1_point(mt.binary.q);
+    if !(0..D).all(|d| bx.min[d] < l1[d] && l1[d] < bx.max[d]) {
+        bail!(
+            "key `domain`: the box must hold L1 at ({:.4}, 0{}) where the stream starts",
+            l1[0],
+            if D == 3 { ", 0" } else { "" }
+        );
+    }
+    let mut p = Particles::<D>::new();
+    let mut st = mt.start_state(cfg.particles.seed, 0);
+    let start = mt.stream.map_or(0.0, |s| s.start);
+    let mut budget = crate::io::summary::MassBudget::default();
+    mt.inject(&mut st, &mut p, start, &mut budget, |_| [0.0; D]);
+    Ok(InitialState {
+        injector: Some(st),
+        ..InitialState::new(p, bx, h)
+    })
+}
+
+/// The radius holding `fraction` of the mass of the particles for which `pick` holds, in
+/// the orbital plane about the accretor (0 if none).
+pub fn mass_radius<const D: usize>(
+    p: &Particles<D>,
+    fraction: f64,
+    pick: impl Fn(usize) -> bool,
+) -> f64 {
+    let mut rm: Vec<(f64, f64)> = (0..p.len())
+        .filter(|&i| pick(i))
+        .map(|i| (p.pos[0][i].hypot(p.pos[1][i]), p.mass[i]))
+        .collect();
+    rm.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = rm.iter().map(|x| x.1).sum();
+    let mut acc = 0.0;
+    for (r, m) in rm {
+        acc += m;
+        if acc >= fraction * total {
+            return r;
+        }
+    }
+    0.0
+}
+
+/// The stream's first pass, measured on the particles in order of release (ids): from L1
+/// inwards to the first minimum of the distance to the accretor. The distance is first
+/// averaged over 9 consecutive releases (a nozzle of finite width spreads neighbouring
+/// particles across the stream) to find the minimum's place, then a parabola fitted to the
+/// raw distances of the 13 releases around it gives its value (an average alone would bias
+/// r_min high by the path's curvature). Returns (r_min, the particle nearest that minimum)
+/// or None if the stream has not yet turned.
+fn first_periastron<const D: usize>(p: &Particles<D>) -> Option<(f64, usize)> {
+    const W: usize = 9;
+    const FIT: usize = 6;
+    let mut order: Vec<usize> = (0..p.len()).collect();
+    // Youngest first: the highest id was released last, nearest L1.
+    order.sort_by_key(|&i| std::cmp::Reverse(p.id[i]));
+    let r: Vec<f64> = order
+        .iter()
+        .map(|&i| (0..D).map(|d| p.pos[d][i].powi(2)).sum::<f64>().sqrt())
+        .collect();
+    if r.len() < W + 2 * FIT {
+        return None;
+    }
+    let smooth: Vec<f64> = r
+        .windows(W)
+        .map(|w| w.iter().sum::<f64>() / W as f64)
+        .collect();
+    let mut best = (f64::INFINITY, 0);
+    let mut turned = false;
+    for (k, &s) in smooth.iter().enumerate() {
+        if s < best.0 {
+            best = (s, k);
+        } else if s > best.0 * 1.1 {
+            // Receding clearly: the minimum is behind us.
+            turned = true;
+            break;
+        }
+    }
+    if !turned {
+        return None;
+    }
+    let c = (best.1 + W / 2).clamp(FIT, r.len() - 1 - FIT);
+    // Least-squares parabola r = a + b k + c k² over k ∈ [−FIT, FIT] (symmetric sums).
+    let (mut s0, mut s2, mut s4, mut t0, mut t1, mut t2) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for k in -(FIT as i64)..=(FIT as i64) {
+        let (kf, rk) = (k as f64, r[(c as i64 + k) as usize]);
+        s0 += 1.0;
+        s2 += kf * kf;
+        s4 += kf.powi(4);
+        t0 += rk;
+        t1 += kf * rk;
+        t2 += kf * kf * rk;
+    }
+    let b = t1 / s2;
+    let cc = (s0 * t2 - s2 * t0) / (s0 * s4 - s2 * s2);
+    let a = (t0 - cc * s2) / s0;
+    let vertex = if cc > 0.0 {
+        a - b * b / (4.0 * cc)
+    } else {
+        best.0
+    };
+    Some((vertex.min(best.0), order[c]))
+}
+
+/// The stream's launch angle below the line of centres at L1, in degrees: the mean
+/// direction of motion of the particles 0.003–0.01 a from L1 on the accretor's side. There
+/// the flow has left the saddle along its unstable direction (Lubow & Shu's angle) but has
+/// not yet curved away; a launch speed c_s adds an epicyclic oscillation of relative size
+/// ~c_s/(λ ξ) (λ ≈ 3.4 the saddle's growth rate), so the figure is Lubow & Shu's limit for
+/// c_s ≲ 1e-3 (the test stream of `problems/roche_stream.toml`).
+fn launch_angle<const D: usize>(p: &Particles<D>, q: f64) -> Option<f64> {
+    let l1 = roche::l1_point(q);
+    let (mut sx, mut sy, mut n) = (0.0, 0.0, 0);
+    for i in 0..p.len() {
+        let (dx, dy) = (p.pos[0][i] - l1[0], p.pos[1][i] - l1[1]);
+        let speed = p.vel[0][i].hypot(p.vel[1][i]);
+        if dx > 0.0 && (0.003..0.01).contains(&dx.hypot(dy)) && speed > 0.0 {
+            sx += p.vel[0][i] / speed;
+            sy += p.vel[1][i] / speed;
+            n += 1;
+        }
+    }
+    (n >= 5).then(|| (-sy).atan2(sx).to_degrees())
+}
+
+/// The binary's figures at the end of a run.
+pub fn errors<const D: usize>(
+    cfg: &Config,
+    p: &Particles<D>,
+    h: f64,
+) -> Result<BTreeMap<String, f64>> {
+    let mt = MassTransfer::from_config(cfg).expect("validated: [binary] present");
+    let b = mt.binary;
+    let q = b.q;
+    let mut e = BTreeMap::new();
+    e.insert("l1_distance".into(), roche::l1_distance(q));
+    e.insert("stream_r_min_predicted".into(), roche::r_min_fit(q));
+    e.insert("stream_r_circ_predicted".into(), roche::r_circ_fit(q));
+    e.insert(
+        "stream_launch_angle_predicted_deg".into(),
+        roche::stream_angle(q).to_degrees(),
+    );
+    if let Some((r_min, i)) = first_periastron(p) {
+        e.insert("stream_r_min".into(), r_min);
+        let x = p.position(i);
+        let v = p.velocity(i);
+        // j about the accretor from the velocity relative to it, v + Ω × x.
+        let j = x[0] * (v[1] + b.omega * x[0]) - x[1] * (v[0] - b.omega * x[1]);
+        e.insert("stream_r_circ".into(), j * j / (1.0 - b.mu));
+    }
+    if let Some(a) = launch_angle(p, q) {
+        e.insert("stream_launch_angle_deg".into(), a);
+    }
+    let disk = |i: usize| is_disk(&b, p, i);
+    let total: f64 = p.mass.iter().sum();
+    let disk_mass: f64 = (0..p.len()).filter(|&i| disk(i)).map(|i| p.mass[i]).sum();
+    e.insert(
+        "disk_mass_fraction".into(),
+        disk_mass / total.max(f64::MIN_POSITIVE),
+    );
+    e.insert("disk_radius_90".into(), mass_radius(p, 0.9, disk));
+    e.insert("r_circ_over_h".into(), roche::r_circ_fit(q) / h);
+    Ok(e)
+}
+
+/// Whether particle `i` is disk gas (near-circular orbit about the accretor).
+pub fn is_disk<const D: usize>(b: &Binary, p: &Particles<D>, i: usize) -> bool {
+    b.region(&p.position(i), &p.velocity(i), 0.0, 0.0) == Region::Disk
+}
+
+/// Bins of the disk-mass histogram in R ∈ [0, 1) about the accretor.
+pub const DISK_BINS: usize = 1000;
+
+/// Disk mass in `DISK_BINS` annuli of width 1/DISK_BINS (summed over ranks by the caller).
+pub fn disk_histogram<const D: usize>(b: &Binary, p: &Particles<D>) -> Vec<f64> {
+    let mut hist = vec![0.0; DISK_BINS];
+    for i in 0..p.len() {
+        if is_disk(b, p, i) {
+            let r = p.pos[0][i].hypot(p.pos[1][i]);
+            let k = ((r * DISK_BINS as f64) as usize).min(DISK_BINS - 1);
+            hist[k] += p.mass[i];
+        }
+    }
+    hist
+}
+
+/// The outer edge of the annulus in which the enclosed disk mass reaches `fraction`.
+pub fn histogram_radius(hist: &[f64], fraction: f64) -> f64 {
+    let total: f64 = hist.iter().sum();
+    let mut acc = 0.0;
+    for (k, m) in hist.iter().enumerate() {
+        acc += m;
+        if total > 0.0 && acc >= fraction * total {
+            return (k + 1) as f64 / hist.len() as f64;
+        }
+    }
+    0.0
+}
+
+/// Luminosity Σ m ε̇ of the disk, the stream and the spot (module doc of
+/// `physics::binary::Region`), for a disk of radius `r_disk`.
+pub fn luminosities<const D: usize>(
+    b: &Binary,
+    p: &Particles<D>,
+    r_disk: f64,
+    support: f64,
+) -> [f64; 3] {
+    let mut l = [0.0; 3];
+    for i in 0..p.len() {
+        let k = match b.region(&p.position(i), &p.velocity(i), r_disk, support) {
+            Region::Disk => 0,
+            Region::Stream => 1,
+            Region::Spot => 2,
+        };
+        l[k] += p.mass[i] * p.diss[i];
+    }
+    l
+}
