@@ -151,6 +151,9 @@ pub trait Team<const D: usize> {
     fn sum(&mut self, x: &mut [f64]);
     fn min(&mut self, x: &mut [f64]);
     fn max(&mut self, x: &mut [f64]);
+    /// Particles inserted on this rank since the last step (a binary's L1 stream) go to the
+    /// ranks that own their places, by the same path as migration.
+    fn adopt(&mut self, p: &mut Particles<D>);
     /// Every particle, on rank 0 (in id order); None on the other ranks.
     fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>>;
     /// After a step: move particles to their new owners, rebalance the load.
@@ -182,6 +185,7 @@ impl<const D: usize> Team<D> for Solo {
     fn sum(&mut self, _: &mut [f64]) {}
     fn min(&mut self, _: &mut [f64]) {}
     fn max(&mut self, _: &mut [f64]) {}
+    fn adopt(&mut self, _: &mut Particles<D>) {}
     fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>> {
         Some(p.clone())
     }
@@ -638,6 +642,9 @@ fn advance<const D: usize>(
     };
     let bar = progress_bar(opts.progress && root);
     while run.st.t < t_end * (1.0 - 1e-12) {
+        if let Some(mt) = &run.mt {
+            inject_stream(mt, &mut run.p, &mut run.st, &run.phys, team);
+        }
         let st = &mut run.st;
         if st.steps >= run.cfg.time.max_steps {
             bail!(
@@ -722,7 +729,7 @@ fn advance<const D: usize>(
             }
         }
         if let Some(mt) = &run.mt {
-            mass_transfer(mt, &mut run.p, &mut run.st, &run.phys, team)?;
+            remove_at_sinks(mt, &mut run.p, &mut run.st, &run.phys, team);
         }
         let st = &mut run.st;
         if let Some(i) = run.p.u.iter().position(|u| !u.is_finite() || *u < 0.0) {
@@ -829,37 +836,57 @@ fn advance<const D: usize>(
     })
 }
 
-/// Between steps in a binary: the sinks on every rank, then the L1 stream's releases on
-/// rank 0 (migration takes them to the ranks that own their places).
-fn mass_transfer<const D: usize>(
+/// After a step in a binary: the sinks on every rank, the outflows summed over ranks.
+fn remove_at_sinks<const D: usize>(
     mt: &MassTransfer,
     p: &mut Particles<D>,
     st: &mut LoopState,
     phys: &crate::sweep::Physics<D>,
     team: &mut dyn Team<D>,
-) -> Result<()> {
+) {
     let mut delta = MassBudget::default();
     mt.remove(p, &mut delta);
     let mut v = delta.outflow_values();
     team.sum(&mut v);
     st.budget.add_outflow_values(&v);
-    if team.is_root()
-        && let Some(inj) = &mut st.injector
-    {
-        let gravity = |x: &[f64; D]| {
-            let mut a = phys.gravity.map_or([0.0; D], |g| g.acceleration(x));
-            if let Some(b) = &phys.binary {
-                let a2 = b.donor_acceleration(x);
-                for d in 0..D {
-                    a[d] += a2[d];
-                }
-            }
-            a
-        };
-        mt.inject(inj, p, st.t, &mut st.budget, gravity);
-    }
     st.prev = TotalsRecord::from(&global_totals(team, p, phys.gravity.as_ref()));
-    Ok(())
+}
+
+/// Before a step in a binary: the L1 stream's releases due by now. Every rank runs the
+/// injector (its state stays the same everywhere); rank 0 keeps the particles and the
+/// team hands them to the ranks that own their places. They start with the binary's
+/// gravity as their acceleration; the step's evaluation gives them the SPH forces.
+fn inject_stream<const D: usize>(
+    mt: &MassTransfer,
+    p: &mut Particles<D>,
+    st: &mut LoopState,
+    phys: &crate::sweep::Physics<D>,
+    team: &mut dyn Team<D>,
+) {
+    let Some(inj) = &mut st.injector else { return };
+    let gravity = |x: &[f64; D]| {
+        let mut a = phys.gravity.map_or([0.0; D], |g| g.acceleration(x));
+        if let Some(b) = &phys.binary {
+            let a2 = b.donor_acceleration(x);
+            for d in 0..D {
+                a[d] += a2[d];
+            }
+        }
+        a
+    };
+    let n = if team.is_root() {
+        mt.inject(inj, p, st.t, &mut st.budget, gravity)
+    } else {
+        let mut scratch = Particles::<D>::new();
+        let mut budget = MassBudget::default();
+        mt.inject(inj, &mut scratch, st.t, &mut budget, gravity)
+    };
+    if n > 0 {
+        if team.ranks() > 1 {
+            team.adopt(p);
+        }
+        st.prev = TotalsRecord::from(&global_totals(team, p, phys.gravity.as_ref()));
+    }
 }
 
 /// A row of `lightcurve.csv` and `monitor.csv` (collective: sums over ranks; rank 0

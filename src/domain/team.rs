@@ -170,6 +170,12 @@ impl<const D: usize> Team<D> for Distributed<'_> {
         self.comm.max(x);
     }
 
+    fn adopt(&mut self, p: &mut Particles<D>) {
+        let decomp = self.decomp.take().expect("decomposition");
+        self.migrated += exchange::migrate(self.comm, &decomp, p) as u64;
+        self.decomp = Some(decomp);
+    }
+
     fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>> {
         let mut buf = Vec::with_capacity(p.len() * Particles::<D>::STATE_LEN);
         for i in 0..p.len() {

@@ -54,7 +54,7 @@ impl MassTransfer {
         InjectorState {
             released: 0,
             next_id,
-            rng: seed ^ 0x5EED_0F_11_5712_EA11,
+            rng: seed ^ 0x5EED_0F11_5712_EA11,
         }
     }
 

@@ -3,10 +3,11 @@
 //! the stream's first release; the box is open (particles leave through the binary's sinks,
 //! `physics::mass_transfer`), 2D in the orbital plane or 3D.
 //!
-//! Figures (`summary.json` `errors`): the stream's closest approach to the accretor r_min,
-//! its launch angle at L1 and its circularisation radius r_circ = j²/GM1 (j the specific
-//! angular momentum about the accretor at r_min), each beside the formula of
-//! exact-solutions.md 4b; and the disk's radius holding 90% of its mass and its mass.
+//! Figures (`summary.json` `errors`): for a test stream (`stream.width = 0`) its closest
+//! approach to the accretor r_min, its launch angle at L1 and its circularisation radius
+//! r_circ = j²/GM1 (j the specific angular momentum about the accretor at r_min), each
+//! beside the formula of exact-solutions.md 4b; and the disk's radius holding 90% of its
+//! mass and its mass fraction.
 
 use std::collections::BTreeMap;
 
@@ -186,7 +187,10 @@ pub fn errors<const D: usize>(
         "stream_launch_angle_predicted_deg".into(),
         roche::stream_angle(q).to_degrees(),
     );
-    if let Some((r_min, i)) = first_periastron(p) {
+    // The stream's own figures need one trajectory sampled in time: a test stream
+    // (`stream.width = 0`); in a disk the particles nearest the accretor are disk gas.
+    let test_stream = cfg.stream.is_some_and(|s| s.width == 0.0);
+    if test_stream && let Some((r_min, i)) = first_periastron(p) {
         e.insert("stream_r_min".into(), r_min);
         let x = p.position(i);
         let v = p.velocity(i);
@@ -194,7 +198,7 @@ pub fn errors<const D: usize>(
         let j = x[0] * (v[1] + b.omega * x[0]) - x[1] * (v[0] - b.omega * x[1]);
         e.insert("stream_r_circ".into(), j * j / (1.0 - b.mu));
     }
-    if let Some(a) = launch_angle(p, q) {
+    if test_stream && let Some(a) = launch_angle(p, q) {
         e.insert("stream_launch_angle_deg".into(), a);
     }
     let disk = |i: usize| is_disk(&b, p, i);

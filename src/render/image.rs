@@ -1,7 +1,7 @@
 //! Particle images as PNG: a snapshot's interpolated field drawn pixel for pixel inside a chart
 //! with axes in code units, a colour bar labelled with the quantity (and log10 on a log
-//! scale), point masses marked, and a title with the time; plus the colour ranges that movie
-//! frames share.
+//! scale), point masses marked, the Roche lobes of a binary run drawn over it (`overlay`),
+//! and a title with the time; plus the colour ranges that movie frames share.
 
 use std::path::{Path, PathBuf};
 
@@ -13,6 +13,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use crate::io::snapshot::Snapshot;
 use crate::render::colormap::{ColorRange, Colormap, Scale};
 use crate::render::interpolate::{Extent, Frame, Quantity, View, interpolate};
+use crate::render::overlay::{PixelMap, draw_roche};
 use crate::render::plot::ensure_font;
 
 /// What to draw and how.
@@ -34,6 +35,10 @@ pub struct RenderOptions {
     pub slice_z: Option<f64>,
     /// Title; `None`: the quantity and the view. The time is always appended.
     pub title: Option<String>,
+    /// The mass ratio q of a binary whose Roche lobes (both outlines and L1, in the frame of
+    /// `analysis::roche`) are drawn over the image; `None`: no lobes. `sphdisk render` takes
+    /// it from the snapshot's parameters ([`crate::render::overlay::mass_ratio_of`]).
+    pub roche_q: Option<f64>,
 }
 
 impl RenderOptions {
@@ -49,6 +54,7 @@ impl RenderOptions {
             frame: None,
             slice_z: None,
             title: None,
+            roche_q: None,
         }
     }
 }
@@ -373,6 +379,16 @@ fn draw_on<DB: DrawingBackend>(
         )
         .map_err(|e| err(&e))?;
 
+    // A binary's Roche lobes and L1, on top, with the image's own pixel mapping.
+    if let Some(q) = opts.roche_q {
+        let map = PixelMap {
+            frame: *frame,
+            px,
+            py,
+        };
+        draw_roche(root, q, opts.view, snap.shift, &map)?;
+    }
+
     // The colour bar, level with the image.
     let (a_lo, a_hi) = (range.axis_value(range.lo), range.axis_value(range.hi));
     let mut bar = ChartBuilder::on(&right)
@@ -561,6 +577,116 @@ mod tests {
             assert_eq!(at(high), opts.colormap.rgb(1.0));
             assert_eq!(at(low), opts.colormap.rgb(0.0));
         }
+    }
+
+    /// A disk about the accretor of a q = 0.1 binary in a box from (−1.5, −1, −0.5) to
+    /// (0.5, 1, 0.5), written as sphdisk writes it (positions shifted into [0, BoxSize],
+    /// `[binary] q` in `/Parameters`) and read back into the run's frame.
+    fn binary_snapshot(dir: &Path) -> (PathBuf, Snapshot) {
+        use crate::io::hdf5::{RunMetadata, Units, read_snapshot, write_snapshot};
+        let mut s = cloud(3);
+        let lo = [-1.5, -1.0, -0.5];
+        let hi = [0.5, 1.0, 0.5];
+        for a in 0..3 {
+            s.pos[a].iter_mut().for_each(|x| *x *= 0.4);
+            s.pos[a].iter_mut().for_each(|x| *x -= lo[a]);
+            s.point_masses[0].pos[a] -= lo[a];
+            s.shift[a] = -lo[a];
+            s.box_lo[a] = 0.0;
+            s.box_hi[a] = hi[a] - lo[a];
+        }
+        let meta = RunMetadata {
+            parameters: [("binary.q", "0.1"), ("problem.kind", "\"cv\"")]
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+            units: Units::default(),
+            periodic: false,
+        };
+        let path = dir.join("snap_0000.hdf5");
+        write_snapshot(&path, &s, &meta, 1).unwrap();
+        let snap = read_snapshot(&path).unwrap().in_run_frame();
+        (path, snap)
+    }
+
+    #[test]
+    fn roche_lobes_are_drawn_over_binary_snapshots() {
+        use crate::render::overlay::{OVERLAY_RGB, mass_ratio_of, roche_curves};
+        let dir = tempfile::tempdir().unwrap();
+        let (path, snap) = binary_snapshot(dir.path());
+        assert_eq!(snap.box_lo, [-1.5, -1.0, -0.5]);
+        let q = mass_ratio_of(&path).unwrap();
+        assert_eq!(q, Some(0.1));
+        for view in [View::FaceOn, View::EdgeOn, View::Slice] {
+            let quantity = match view {
+                View::Slice => Quantity::Density,
+                _ => Quantity::ColumnDensity,
+            };
+            let mut opts = RenderOptions::new(quantity, view);
+            opts.resolution = (120, 120);
+            opts.roche_q = q;
+            let frame = frame_for(&snap, &opts).unwrap();
+            let (field, _) = render_field(&snap, &opts).unwrap();
+            let range = ColorRange::new(1e-3, 10.0, Scale::Log).unwrap();
+            let ((w, h), _) = picture_size(&frame);
+            let k = upscale(frame.nx, frame.ny) as i32;
+            let (left, top) = ((MARGIN + Y_LABEL_AREA) as i32, (TITLE_H + MARGIN) as i32);
+            let map = PixelMap {
+                frame,
+                px: left..left + frame.nx as i32 * k,
+                py: top..top + frame.ny as i32 * k,
+            };
+            let draw = |o: &RenderOptions| {
+                let mut buf = vec![0u8; 3 * (w * h) as usize];
+                {
+                    let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+                    draw_on(&root, &snap, &field, &frame, o, range).unwrap();
+                    root.present().unwrap();
+                }
+                buf
+            };
+            let at = |buf: &[u8], (x, y): (i32, i32)| {
+                let p = 3 * (y as usize * w as usize + x as usize);
+                [buf[p], buf[p + 1], buf[p + 2]]
+            };
+            let with = draw(&opts);
+            let without = draw(&RenderOptions {
+                roche_q: None,
+                ..opts.clone()
+            });
+            // Every point of both outlines inside the image (and its pixel) is white, and
+            // was not before; most of both lobes is in the picture.
+            let (lobes, l1) = roche_curves(0.1, view, [0.0; 3]);
+            for lobe in &lobes {
+                let pixels: Vec<_> = lobe.iter().filter_map(|&p| map.pixel(p)).collect();
+                assert!(pixels.len() > lobe.len() / 2, "{view}: {}", pixels.len());
+                for &p in &pixels {
+                    assert_eq!(at(&with, p), OVERLAY_RGB, "{view} at {p:?}");
+                }
+                assert!(pixels.iter().any(|&p| at(&without, p) != OVERLAY_RGB));
+            }
+            // The cross at L1.
+            let (c, r) = map.pixel(l1).unwrap();
+            for p in [(c - 4, r), (c + 4, r), (c, r - 4), (c, r + 4)] {
+                assert_eq!(at(&with, p), OVERLAY_RGB, "{view}: cross at {p:?}");
+            }
+            // Off the lines the picture is unchanged: the centre of the accretor's lobe
+            // away from the star's ring, and the corner of the box.
+            for p in [
+                map.pixel([0.3, 0.02]).unwrap(),
+                (map.px.start + 2, map.py.end - 3),
+            ] {
+                assert_eq!(at(&with, p), at(&without, p), "{view} at {p:?}");
+            }
+        }
+        // And into a PNG, whose bytes differ from the picture without the lobes.
+        let mut opts = RenderOptions::new(Quantity::ColumnDensity, View::FaceOn);
+        opts.resolution = (64, 64);
+        render_png(&snap, &opts, &dir.path().join("plain.png")).unwrap();
+        opts.roche_q = q;
+        render_png(&snap, &opts, &dir.path().join("roche.png")).unwrap();
+        let read = |n: &str| std::fs::read(dir.path().join(n)).unwrap();
+        assert_ne!(read("plain.png"), read("roche.png"));
     }
 
     #[test]

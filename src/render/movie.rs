@@ -1,5 +1,6 @@
 //! `sphdisk render` on a run folder: every snapshot of the run (from `snapshots.json`) as a
-//! numbered PNG frame, all with one colour range so that the frames make a movie.
+//! numbered PNG frame, all with one colour range so that the frames make a movie, and all
+//! with the same overlay (`RenderOptions::roche_q`: a binary's Roche lobes).
 
 use std::path::{Path, PathBuf};
 
@@ -10,7 +11,8 @@ use crate::render::image::{RenderOptions, common_range, draw_png, render_field};
 use crate::simulation::SnapshotIndex;
 
 /// Renders every snapshot of the run in `run` into `out/frame_NNNN.png` with a colour range
-/// fixed over all of them (unless `opts.range` fixes it already); returns the frames written.
+/// fixed over all of them (unless `opts.range` fixes it already) and the rest of `opts` —
+/// the Roche lobes of `opts.roche_q` included — for every frame; returns the frames written.
 pub fn render_run(run: &Path, opts: &RenderOptions, out: &Path) -> Result<Vec<PathBuf>> {
     let index = SnapshotIndex::read(run)?;
     if index.snapshots.is_empty() {
@@ -40,4 +42,82 @@ pub fn render_run(run: &Path, opts: &RenderOptions, out: &Path) -> Result<Vec<Pa
         written.push(path);
     }
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::hdf5::{RunMetadata, Units, write_snapshot};
+    use crate::io::snapshot::Snapshot;
+    use crate::render::interpolate::{Quantity, View};
+    use crate::render::overlay::mass_ratio_of;
+    use crate::simulation::SnapshotEntry;
+
+    /// A run folder of a q = 0.2 binary with two snapshots of a small ring about the
+    /// accretor, box (−1.5, −1) … (0.5, 1), as a 2D run writes them.
+    fn binary_run(dir: &Path) {
+        let meta = RunMetadata {
+            parameters: [("binary.q".to_string(), "0.2".to_string())].into(),
+            units: Units::default(),
+            periodic: false,
+        };
+        let mut index = SnapshotIndex::default();
+        for k in 0..2 {
+            let mut s = Snapshot {
+                dimension: 2,
+                time: k as f64,
+                box_hi: [2.0, 2.0, 1.0],
+                shift: [1.5, 1.0, 0.0],
+                ..Snapshot::default()
+            };
+            for i in 0..200 {
+                let phi = std::f64::consts::TAU * (i as f64 + 0.1 * k as f64) / 200.0;
+                let r = 0.2 + 0.1 * (i % 5) as f64 / 5.0;
+                s.pos[0].push(1.5 + r * phi.cos());
+                s.pos[1].push(1.0 + r * phi.sin());
+                s.pos[2].push(0.0);
+                for v in &mut s.vel {
+                    v.push(0.0);
+                }
+                s.id.push(i);
+                s.mass.push(1e-3);
+                s.h.push(0.05);
+                s.rho.push(1.0);
+                s.u.push(1.0);
+                s.p.push(1.0);
+                s.diss.push(0.0);
+            }
+            let file = format!("snap_{k:04}.hdf5");
+            write_snapshot(&dir.join(&file), &s, &meta, 1).unwrap();
+            index.snapshots.push(SnapshotEntry {
+                file,
+                time: s.time,
+                step: k,
+                files: 1,
+            });
+        }
+        std::fs::write(
+            dir.join("snapshots.json"),
+            serde_json::to_string(&index).unwrap(),
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn frames_of_a_binary_run_carry_the_roche_lobes() {
+        let dir = tempfile::tempdir().unwrap();
+        binary_run(dir.path());
+        let q = mass_ratio_of(dir.path()).unwrap();
+        assert_eq!(q, Some(0.2));
+        let mut opts = RenderOptions::new(Quantity::Density, View::FaceOn);
+        opts.resolution = (48, 48);
+        let plain = render_run(dir.path(), &opts, &dir.path().join("plain")).unwrap();
+        opts.roche_q = q;
+        let roche = render_run(dir.path(), &opts, &dir.path().join("roche")).unwrap();
+        assert_eq!(plain.len(), 2);
+        assert_eq!(roche.len(), 2);
+        for (a, b) in plain.iter().zip(&roche) {
+            assert_ne!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+        }
+    }
 }
