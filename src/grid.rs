@@ -1,6 +1,12 @@
 //! The neighbour grid (paper, Section 2.1): a uniform grid of cells no smaller than the kernel
 //! support, cell indices in x-major order (so that an x-slab of cells is a contiguous range),
-//! and the counting sort that orders particles by cell.
+//! and the sort that orders particles by cell.
+//!
+//! The index of occupied cells ([`CellIndex`]) is dense (one entry per cell, counting sort)
+//! when the grid has no more cells than a few per particle, and sparse otherwise (only the
+//! occupied cells, sorted by key, found by binary search): a box that is mostly empty — a
+//! binary's stream and disk, a particle flung far out — costs memory and time in proportion
+//! to the particles, not to its volume.
 
 use crate::boundary::{BoundaryKind, SimBox};
 
@@ -74,6 +80,73 @@ impl<const D: usize> Grid<D> {
         k
     }
 
+    /// Linear index as a 64-bit key (a sparse grid may have more cells than `u32` counts).
+    #[inline]
+    pub fn key(&self, c: [usize; D]) -> u64 {
+        let mut k = 0u64;
+        for d in 0..D {
+            k = k * self.n[d] as u64 + c[d] as u64;
+        }
+        k
+    }
+
+    /// Cells in the grid, as a 64-bit count (saturating).
+    pub fn num_cells_u64(&self) -> u64 {
+        self.n.iter().fold(1u64, |a, &b| a.saturating_mul(b as u64))
+    }
+
+    /// Sorts particles by cell into a [`CellIndex`]: returns `(order, index)` where
+    /// `order[k]` is the source index of the k-th particle in cell order (stable: equal
+    /// cells keep source order).
+    pub fn index_particles(&self, pos: &[Vec<f64>; D]) -> (Vec<u32>, CellIndex) {
+        let n = pos[0].len();
+        let cells = self.num_cells_u64();
+        // Dense while the cell array is no larger than a few entries per particle.
+        if cells <= (4 * n as u64).max(1024) {
+            let (order, start) = self.sort(pos);
+            let cps = self.cells_per_slab();
+            let slab_start = (0..=self.n[0]).map(|s| start[s * cps]).collect();
+            return (
+                order,
+                CellIndex {
+                    keys: None,
+                    start,
+                    slab_start,
+                    cells_per_slab: cps as u64,
+                },
+            );
+        }
+        let keys: Vec<u64> = (0..n)
+            .map(|i| self.key(self.coords(std::array::from_fn(|d| pos[d][i]))))
+            .collect();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_by_key(|&i| keys[i as usize]);
+        let mut occupied = Vec::new();
+        let mut start = Vec::new();
+        for (k, &o) in order.iter().enumerate() {
+            let key = keys[o as usize];
+            if occupied.last() != Some(&key) {
+                occupied.push(key);
+                start.push(k as u32);
+            }
+        }
+        start.push(n as u32);
+        let cps = self.n[1..].iter().product::<usize>() as u64;
+        // First particle of each x-slab: the first occupied cell with key ≥ s · cps.
+        let slab_start = (0..=self.n[0] as u64)
+            .map(|s| start[occupied.partition_point(|&k| k < s * cps)])
+            .collect();
+        (
+            order,
+            CellIndex {
+                keys: Some(occupied),
+                start,
+                slab_start,
+                cells_per_slab: cps,
+            },
+        )
+    }
+
     /// Counting sort of particles by cell: returns `(order, cell_start)` where `order[k]` is
     /// the source index of the k-th particle in cell order and the particles of cell `c` are
     /// `order[cell_start[c]..cell_start[c + 1]]`. Stable: equal cells keep source order.
@@ -100,9 +173,123 @@ impl<const D: usize> Grid<D> {
     }
 }
 
+/// Where each cell's particles lie in cell order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellIndex {
+    /// Sparse: the occupied cells' keys, ascending (`start` has one entry per key, plus the
+    /// end). Dense (None): `start` has one entry per cell of the grid, plus the end.
+    keys: Option<Vec<u64>>,
+    start: Vec<u32>,
+    /// First particle of each x-slab, plus the end.
+    slab_start: Vec<u32>,
+    cells_per_slab: u64,
+}
+
+impl CellIndex {
+    /// The particles of the cell with `key`: `start..end` in cell order (empty if none).
+    #[inline]
+    pub fn range(&self, key: u64) -> (usize, usize) {
+        match &self.keys {
+            None => (
+                self.start[key as usize] as usize,
+                self.start[key as usize + 1] as usize,
+            ),
+            Some(keys) => match keys.binary_search(&key) {
+                Ok(c) => (self.start[c] as usize, self.start[c + 1] as usize),
+                Err(_) => (0, 0),
+            },
+        }
+    }
+
+    /// The particles of x-slab `s`.
+    pub fn slab_range(&self, s: usize) -> std::ops::Range<usize> {
+        self.slab_start[s] as usize..self.slab_start[s + 1] as usize
+    }
+
+    /// x-slab of the cell with `key`.
+    #[inline]
+    pub fn slab_of_key(&self, key: u64) -> usize {
+        (key / self.cells_per_slab) as usize
+    }
+
+    /// Whether the index holds only the occupied cells.
+    pub fn is_sparse(&self) -> bool {
+        self.keys.is_some()
+    }
+
+    /// Bytes the index holds.
+    pub fn bytes(&self) -> usize {
+        4 * (self.start.len() + self.slab_start.len())
+            + 8 * self.keys.as_ref().map_or(0, |k| k.len())
+    }
+
+    /// Key of every particle in cell order.
+    pub fn keys_in_order(&self) -> Vec<u64> {
+        let mut out = Vec::with_capacity(*self.start.last().unwrap_or(&0) as usize);
+        let cells = self.start.len().saturating_sub(1);
+        for c in 0..cells {
+            let key = self.keys.as_ref().map_or(c as u64, |k| k[c]);
+            for _ in self.start[c]..self.start[c + 1] {
+                out.push(key);
+            }
+        }
+        out
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sparse index finds the same particles in every cell and slab as the dense one,
+    /// and holds only the occupied cells.
+    #[test]
+    fn sparse_index_matches_the_dense_one() {
+        let bx = SimBox {
+            min: [-5.0; 3],
+            max: [5.0; 3],
+            kinds: [BoundaryKind::Open; 3],
+        };
+        let mut rng = crate::rng::Rng::new(3);
+        let mut pos: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::new());
+        for i in 0..300 {
+            for d in 0..3 {
+                // A tight clump and a few far-flung particles: a mostly empty box.
+                let x = if i % 50 == 0 {
+                    4.0 * (2.0 * rng.uniform() - 1.0)
+                } else {
+                    0.1 * rng.normal()
+                };
+                pos[d].push(x);
+            }
+        }
+        let g = Grid::new(&bx, 0.05, &pos);
+        assert!(g.num_cells_u64() > 4 * 300);
+        let (order, idx) = g.index_particles(&pos);
+        assert!(idx.is_sparse());
+        let (dense_order, start) = g.sort(&pos);
+        assert_eq!(order, dense_order, "same stable cell order");
+        for c in 0..g.num_cells() {
+            let (a, b) = idx.range(c as u64);
+            if start[c] < start[c + 1] {
+                assert_eq!((a, b), (start[c] as usize, start[c + 1] as usize));
+            } else {
+                assert_eq!(a, b);
+            }
+        }
+        let cps = g.cells_per_slab();
+        for s in 0..g.n[0] {
+            assert_eq!(
+                idx.slab_range(s),
+                start[s * cps] as usize..start[(s + 1) * cps] as usize
+            );
+        }
+        assert!(
+            idx.bytes() < 64 * 300,
+            "{} bytes for 300 particles",
+            idx.bytes()
+        );
+    }
 
     #[test]
     fn closed_axes_get_a_ghost_layer_and_exact_cells() {

@@ -254,6 +254,11 @@ struct LoopState {
     ghosts: usize,
     /// Wall seconds spent before this process started (earlier parts of a resumed run).
     wall_before: f64,
+    /// Largest neighbour grid of the run: cells, and bytes of its cell index.
+    #[serde(default)]
+    peak_grid_cells: u64,
+    #[serde(default)]
+    peak_grid_index_bytes: usize,
     /// A binary's L1 injector.
     #[serde(default)]
     injector: Option<InjectorState>,
@@ -577,6 +582,8 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
         evaluations: 1,
         ghosts: 0,
         wall_before: 0.0,
+        peak_grid_cells: 0,
+        peak_grid_index_bytes: 0,
         injector,
         budget: MassBudget::default(),
         next_series: 0.0,
@@ -691,8 +698,15 @@ fn advance<const D: usize>(
             run.p.interactions.iter().map(|&k| k as f64).sum::<f64>(),
         ];
         team.sum(&mut sums);
-        let mut maxes = [s.peak_pairs as f64, s.peak_window_bytes as f64];
+        let mut maxes = [
+            s.peak_pairs as f64,
+            s.peak_window_bytes as f64,
+            s.grid_cells as f64,
+            s.grid_index_bytes as f64,
+        ];
         team.max(&mut maxes);
+        st.peak_grid_cells = st.peak_grid_cells.max(maxes[2] as u64);
+        st.peak_grid_index_bytes = st.peak_grid_index_bytes.max(maxes[3] as usize);
         st.t = if lands { target } else { st.t + dt };
         st.steps += 1;
         st.evaluations += 1;
@@ -984,6 +998,8 @@ fn finish<const D: usize>(
         mean_neighbours: st.interactions_sum as f64 / (st.evaluations as f64 * n as f64),
         ghosts: st.ghosts,
         peak_window_bytes: st.peak_bytes,
+        peak_grid_cells: st.peak_grid_cells,
+        peak_grid_index_bytes: st.peak_grid_index_bytes,
         peak_rss_bytes: peak_rss_bytes(),
         totals_start: st.totals_start.clone(),
         totals_end: TotalsRecord::from(&totals_end),

@@ -183,3 +183,36 @@ fn full_list_window_gives_identical_results_with_more_memory() {
         sb.peak_pairs
     );
 }
+
+/// A mostly empty open box (a dense clump and a few particles far out, as a binary's disk
+/// and its escaping gas): the grid index is sparse, and the pairs and sums are still exactly
+/// those of brute force and of the full pair list.
+#[test]
+fn sparse_grid_of_a_mostly_empty_box_finds_the_same_pairs_and_sums() {
+    let mut rng = Rng::new(11);
+    let mut p = Particles::<3>::new();
+    for i in 0..1200 {
+        let far = i % 100 == 0;
+        let pos: [f64; 3] = std::array::from_fn(|_| {
+            if far {
+                0.5 + 0.5 * (2.0 * rng.uniform() - 1.0)
+            } else {
+                0.5 + 0.01 * rng.normal()
+            }
+        });
+        let vel: [f64; 3] = std::array::from_fn(|_| rng.normal());
+        p.push(i as u64, pos, vel, 1.0, 1.0 + rng.uniform());
+    }
+    let bx = unit_box([BoundaryKind::Open; 3]);
+    let h = 0.004;
+    let local = Local::build(&p, &bx, Kernel::<3>::new(h).support());
+    assert!(local.cells.is_sparse(), "the grid of this box is sparse");
+    assert!(
+        local.cells.bytes() < 100 * p.len(),
+        "index {} bytes for {} particles",
+        local.cells.bytes(),
+        p.len()
+    );
+    check_pairs(&p, &bx, h);
+    check_sums(p, &bx, h);
+}

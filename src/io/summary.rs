@@ -33,6 +33,12 @@ pub struct Summary {
     pub mean_neighbours: f64,
     pub ghosts: usize,
     pub peak_window_bytes: usize,
+    /// The largest neighbour grid of the run: its cells (most empty in a sparse box), and
+    /// the bytes of its cell index (per occupied cell when sparse).
+    #[serde(default)]
+    pub peak_grid_cells: u64,
+    #[serde(default)]
+    pub peak_grid_index_bytes: usize,
     /// Peak resident memory of the process (VmHWM), bytes; 0 where unknown.
     pub peak_rss_bytes: u64,
     pub totals_start: TotalsRecord,

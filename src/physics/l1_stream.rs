@@ -273,7 +273,8 @@ mod tests {
 
     #[test]
     fn nozzle_width_follows_the_l1_curvature() {
-        let s = stream(0.05);
+        let mut s = stream(0.05);
+        s.stop = f64::INFINITY;
         let mut st = InjectorState::default();
         let mut p = Particles::<3>::new();
         s.inject(&mut st, &mut p, 4000.0 * std::f64::consts::TAU / 100.0, 0.0);

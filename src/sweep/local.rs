@@ -2,7 +2,7 @@
 //! (x-major, so every x-slab is a contiguous range), with the per-particle accumulators.
 
 use crate::boundary::{Ghost, SimBox, make_ghosts};
-use crate::grid::Grid;
+use crate::grid::{CellIndex, Grid};
 use crate::particles::{Particles, retain_by};
 
 /// Per-particle accumulators of the three sums. Kept apart from [`Local`] so that the sums can
@@ -179,10 +179,10 @@ impl<const D: usize> Elements<D> {
 /// Real particles and ghosts of one evaluation, sorted by cell.
 pub struct Local<const D: usize> {
     pub grid: Grid<D>,
-    /// First local index of each cell; `cell_start[c]..cell_start[c + 1]`.
-    pub cell_start: Vec<u32>,
-    /// Cell index of each local particle.
-    pub cell: Vec<u32>,
+    /// Where each occupied cell's particles lie (dense or sparse, `grid::CellIndex`).
+    pub cells: CellIndex,
+    /// Cell key (x-major linear index) of each local particle.
+    pub cell: Vec<u64>,
     /// Index of the real particle (for a ghost: its owner) in the [`Particles`] store;
     /// [`REMOTE`] for another rank's particle.
     pub src: Vec<u32>,
@@ -227,15 +227,10 @@ impl<const D: usize> Local<D> {
     /// Sorts `e` into the cells of `grid`.
     pub fn from_elements(e: Elements<D>, grid: Grid<D>) -> Self {
         let n = e.n_real;
-        let (order, cell_start) = grid.sort(&e.pos);
+        let (order, cells) = grid.index_particles(&e.pos);
         let total = order.len();
         let mut local_of_real = vec![0u32; n];
-        let mut cell = vec![0u32; total];
-        for c in 0..grid.num_cells() {
-            for k in cell_start[c]..cell_start[c + 1] {
-                cell[k as usize] = c as u32;
-            }
-        }
+        let cell = cells.keys_in_order();
         for (k, &o) in order.iter().enumerate() {
             if (o as usize) < n {
                 local_of_real[o as usize] = k as u32;
@@ -255,7 +250,7 @@ impl<const D: usize> Local<D> {
             .collect();
         Self {
             grid,
-            cell_start,
+            cells,
             cell,
             owner,
             is_ghost: order.iter().map(|&o| o as usize >= n).collect(),
@@ -298,13 +293,12 @@ impl<const D: usize> Local<D> {
 
     /// Local index range of x-slab `s`.
     pub fn slab_range(&self, s: usize) -> std::ops::Range<usize> {
-        let cps = self.grid.cells_per_slab();
-        self.cell_start[s * cps] as usize..self.cell_start[(s + 1) * cps] as usize
+        self.cells.slab_range(s)
     }
 
     /// x-slab of local particle `k`.
     pub fn slab_of(&self, k: usize) -> usize {
-        self.cell[k] as usize / self.grid.cells_per_slab()
+        self.cells.slab_of_key(self.cell[k])
     }
 
     #[inline]

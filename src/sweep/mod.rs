@@ -80,6 +80,10 @@ pub struct SweepStats {
     /// Bytes the window held at its peak.
     pub peak_window_bytes: usize,
     pub ghosts: usize,
+    /// Cells of the neighbour grid (most of them empty in a sparse box).
+    pub grid_cells: u64,
+    /// Bytes of the grid's cell index (dense: one entry per cell; sparse: per occupied cell).
+    pub grid_index_bytes: usize,
     pub slabs: usize,
     /// Seconds spent in each part of the evaluation.
     pub times: StageTimes,
@@ -267,6 +271,8 @@ pub fn sweep<const D: usize>(
     let mut stats = SweepStats {
         ghosts: local.num_ghosts(),
         slabs: ns,
+        grid_cells: local.grid.num_cells_u64(),
+        grid_index_bytes: local.cells.bytes(),
         ..Default::default()
     };
     let mut times = StageTimes {

@@ -142,9 +142,9 @@ impl PairBlock {
                 let mut pairs = Vec::new();
                 // Candidate ranges: the particle's own cell below it, then the stencil cells.
                 let mut ranges: Vec<(usize, usize)> = Vec::with_capacity(stencil.len() + 1);
-                let mut ranges_cell = usize::MAX;
+                let mut ranges_cell = u64::MAX;
                 for i in g0..g1 {
-                    let c = local.cell[i] as usize;
+                    let c = local.cell[i];
                     if c != ranges_cell {
                         ranges_cell = c;
                         ranges.clear();
@@ -161,11 +161,7 @@ impl PairBlock {
                                 nc[d] = x as usize;
                             }
                             if inside {
-                                let cc = grid.index(nc);
-                                let (a, b) = (
-                                    local.cell_start[cc] as usize,
-                                    local.cell_start[cc + 1] as usize,
-                                );
+                                let (a, b) = local.cells.range(grid.key(nc));
                                 if a < b {
                                     ranges.push((a, b));
                                 }
@@ -174,7 +170,7 @@ impl PairBlock {
                     }
                     let xi: [f64; D] = std::array::from_fn(|d| pos[d][i]);
                     let ci = local.class[i];
-                    let own = (local.cell_start[c] as usize, i);
+                    let own = (local.cells.range(c).0, i);
                     for &(a, b) in std::iter::once(&own).chain(ranges.iter()) {
                         let len = b - a;
                         let xs: [&[f64]; D] = std::array::from_fn(|d| &pos[d][a..b]);
@@ -348,11 +344,11 @@ impl PairBlock {
 
 /// Integer cell coordinates from an x-major linear index.
 #[inline]
-fn cell_coords<const D: usize>(n: [usize; D], mut c: usize) -> [usize; D] {
+fn cell_coords<const D: usize>(n: [usize; D], mut c: u64) -> [usize; D] {
     let mut out = [0; D];
     for d in (0..D).rev() {
-        out[d] = c % n[d];
-        c /= n[d];
+        out[d] = (c % n[d] as u64) as usize;
+        c /= n[d] as u64;
     }
     out
 }
