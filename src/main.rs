@@ -89,6 +89,10 @@ enum Command {
         /// Height of the slice plane (3D `--view slice`; default: the box middle).
         #[arg(long)]
         slice_z: Option<f64>,
+        /// Do not draw the Roche lobes and L1 of a binary run (drawn when the snapshot's
+        /// problem file has `[binary]`).
+        #[arg(long)]
+        no_roche: bool,
     },
     /// Check a problem file (keys, values, initial particles) without running it.
     Check {
@@ -156,6 +160,21 @@ enum AnalyseCommand {
     /// The shock tube: ρ, v, p, u against the exact Riemann solution at the final time
     /// (sod.png, sod_profile.csv in the run folder).
     Sod {
+        /// The run's output folder.
+        run: PathBuf,
+    },
+    /// A light curve: the strongest period of lightcurve.csv between 0.2 and 5 orbits, e.g.
+    /// a superhump (lightcurve.png, periodogram.png, lightcurve.json in the run folder).
+    Lightcurve {
+        /// The run's output folder.
+        run: PathBuf,
+        /// Orbits at the start of the light curve to leave out as the transient.
+        #[arg(long, default_value_t = 0.0)]
+        skip_orbits: f64,
+    },
+    /// A cataclysmic variable: the disk's radii and eccentricity, the bright spot's azimuth
+    /// and, in 3D, the stream's overflow at each snapshot (cv_evolution.csv, cv.json).
+    Cv {
         /// The run's output folder.
         run: PathBuf,
     },
@@ -363,6 +382,27 @@ fn real_main(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Analyse {
+            what: AnalyseCommand::Lightcurve { run, skip_orbits },
+        } => {
+            let report =
+                sphdisk::analysis::lightcurve_report::analyse_lightcurve(&run, skip_orbits)?;
+            print!("{}", report.summary());
+            for f in &report.files {
+                println!("wrote {}", f.display());
+            }
+            Ok(())
+        }
+        Command::Analyse {
+            what: AnalyseCommand::Cv { run },
+        } => {
+            let report = sphdisk::analysis::cv_report::analyse_cv(&run)?;
+            print!("{}", report.summary());
+            for f in &report.files {
+                println!("wrote {}", f.display());
+            }
+            Ok(())
+        }
         Command::Render {
             input,
             quantity,
@@ -375,6 +415,7 @@ fn real_main(cli: Cli) -> Result<()> {
             xlim,
             ylim,
             slice_z,
+            no_roche,
         } => {
             use sphdisk::render::interpolate::Extent;
             let mut opts = RenderOptions::new(quantity.parse()?, view.parse()?);
@@ -387,6 +428,9 @@ fn real_main(cli: Cli) -> Result<()> {
             opts.resolution = (resolution, resolution);
             opts.range = range.as_deref().map(|r| pair("--range", r)).transpose()?;
             opts.slice_z = slice_z;
+            if !no_roche {
+                opts.roche_q = sphdisk::render::overlay::mass_ratio_of(&input)?;
+            }
             match (xlim, ylim) {
                 (None, None) => {}
                 (Some(x), Some(y)) => {

@@ -241,3 +241,98 @@ fn bad_viscosity_and_disk_settings_are_named() {
         &["disk.inner_width"],
     );
 }
+
+/// Fails the same way for `check` and for `run` (into `dir/out`), naming every word of
+/// `expect` in one line, with exit code 2.
+fn assert_check_and_run_fail(dir: &Path, file: &str, sets: &[&str], expect: &[&str]) {
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    for command in ["check", "run"] {
+        let mut args = vec![command, file];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        if command == "run" {
+            args.extend(["--quiet", "--out", out]);
+        }
+        assert_fails(dir, &args, expect);
+        let (code, _) = sphdisk(dir, &args);
+        assert_eq!(code, 2, "{args:?}: exit code");
+    }
+    assert!(
+        !dir.join("out").join("summary.json").exists(),
+        "nothing was run"
+    );
+}
+
+#[test]
+fn bad_binaries_and_streams_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    let cv = problem("cv2d.toml");
+    let stream = problem("roche_stream.toml");
+    for q in ["-1", "0"] {
+        let set = format!("binary.q={q}");
+        assert_check_and_run_fail(d.path(), &cv, &[&set], &["binary.q", "mass ratio"]);
+    }
+    assert_check_and_run_fail(
+        d.path(),
+        &cv,
+        &["stream.mass_per_orbit=-1"],
+        &["stream.mass_per_orbit", "-1"],
+    );
+    // L1 lies 0.7175 a from the accretor at q = 0.1.
+    assert_check_and_run_fail(
+        d.path(),
+        &cv,
+        &["binary.accretor_radius=0.9"],
+        &["binary.accretor_radius", "Roche lobe", "0.9"],
+    );
+    assert_check_and_run_fail(
+        d.path(),
+        &stream,
+        &["domain.min=[-0.5, -0.7]", "domain.max=[0.7, 0.7]"],
+        &["domain.min", "L1", "-0.5"],
+    );
+    assert_check_and_run_fail(
+        d.path(),
+        &stream,
+        &["domain.min=[-0.8, -0.7]", "domain.max=[-0.75, 0.7]"],
+        &["domain.max", "L1", "-0.75"],
+    );
+    assert_check_and_run_fail(
+        d.path(),
+        &stream,
+        &["stream.particles_per_orbit=1e300"],
+        &["stream.particles_per_orbit", "1e300"],
+    );
+    // A binary in a 1D problem.
+    assert_check_and_run_fail(
+        d.path(),
+        &cv,
+        &["problem.dimension=1"],
+        &["binary", "problem.dimension"],
+    );
+    // [gravity] beside [binary]: the accretor is the central mass.
+    assert_check_and_run_fail(d.path(), &cv, &["gravity.gm=1"], &["[gravity]", "[binary]"]);
+    // [stream] without [binary]: in a cv problem, and beside a plain central mass.
+    let text = std::fs::read_to_string(&cv).unwrap();
+    let (head, tail) = text.split_once("[binary]").unwrap();
+    let (_, tail) = tail.split_once("[stream]").unwrap();
+    let no_binary = d.path().join("no_binary.toml");
+    std::fs::write(&no_binary, format!("{head}[stream]{tail}")).unwrap();
+    assert_check_and_run_fail(
+        d.path(),
+        no_binary.to_str().unwrap(),
+        &[],
+        &["[stream]", "[binary]"],
+    );
+    assert_check_and_run_fail(
+        d.path(),
+        &problem("ring.toml"),
+        &[
+            "stream.particles_per_orbit=100",
+            "stream.mass_per_orbit=1e-3",
+        ],
+        &["[stream]", "[binary]"],
+    );
+}

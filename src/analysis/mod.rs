@@ -2,7 +2,10 @@
 //! (error norms, binned profiles, front positions).
 
 pub mod advection;
+pub mod cv_report;
 pub mod disk_report;
+pub mod lightcurve_report;
+pub mod periodogram;
 pub mod riemann;
 pub mod ring;
 pub mod ring_report;

@@ -51,14 +51,16 @@ impl StreamParams {
         let n = self.particles_per_orbit;
         if !(n > 0.0 && n <= 1e7) {
             return Err(format!(
-                "key `stream.particles_per_orbit`: must be > 0 and ≤ 1e7, got {n}"
+                "key `stream.particles_per_orbit`: must be > 0 and ≤ 1e7, got {}",
+                show(n)
             ));
         }
         match (self.mass_per_orbit, self.mdot_msun_per_year) {
             (Some(m), None) if m > 0.0 && m.is_finite() => {}
             (Some(m), None) => {
                 return Err(format!(
-                    "key `stream.mass_per_orbit`: must be > 0 (a transfer rate), got {m}"
+                    "key `stream.mass_per_orbit`: must be > 0 (a transfer rate), got {}",
+                    show(m)
                 ));
             }
             (None, Some(m)) if !physical => {
@@ -116,6 +118,16 @@ impl StreamParams {
 
 fn one() -> f64 {
     1.0
+}
+
+/// A value for a message: exponent notation when very large or small (`1e300`, not 301
+/// digits).
+fn show(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e7).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
 }
 
 /// What the injector carries between steps (checkpointed).

@@ -43,16 +43,35 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     if mt.stream.is_none() {
         bail!("table `[stream]`: missing (a cv problem's gas comes through L1)");
     }
+    if let Some(s) = &cfg.stream
+        && s.start > 0.0
+    {
+        bail!(
+            "key `stream.start`: a cv problem's gas all comes through L1, so its stream starts at \
+             t = 0 (got {}); a later start needs gas already in place",
+            s.start
+        );
+    }
     let h = cfg.particles.h.expect("validated: particles.h present");
     let (lo, hi) = default_box::<D>(mt.binary.q);
     let bx = make_box(cfg, lo, hi, [BoundaryKind::Open; D]);
     let l1 = roche::l1_point(mt.binary.q);
-    if !(0..D).all(|d| bx.min[d] < l1[d] && l1[d] < bx.max[d]) {
-        bail!(
-            "key `domain`: the box must hold L1 at ({:.4}, 0{}) where the stream starts",
-            l1[0],
-            if D == 3 { ", 0" } else { "" }
-        );
+    for d in 0..D {
+        // The key and the value at fault: the lower or the upper face on this axis.
+        let (key, face) = if bx.min[d] < l1[d] {
+            ("max", bx.max[d])
+        } else {
+            ("min", bx.min[d])
+        };
+        if !(bx.min[d] < l1[d] && l1[d] < bx.max[d]) {
+            bail!(
+                "key `domain.{key}`: the box must hold L1 at ({:.4}, 0{}) where the stream \
+                 starts, but its {key} along {} is {face}",
+                l1[0],
+                if D == 3 { ", 0" } else { "" },
+                ["x", "y", "z"][d]
+            );
+        }
     }
     let mut p = Particles::<D>::new();
     let mut st = mt.start_state(cfg.particles.seed, 0);

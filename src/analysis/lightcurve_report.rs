@@ -1,0 +1,761 @@
+//! `sphdisk analyse lightcurve <run>`: the strongest period in a run's light curve
+//! (`lightcurve.csv`, written during binary runs) — for a cataclysmic variable, e.g. a
+//! superhump and its period excess over the orbit.
+//!
+//! Code units of the binary: a = 1, G(M1 + M2) = 1, so Ω_orb = 1 and P_orb = 2π always; the
+//! orbit column of the file is not trusted, orbits are t/2π. The first `skip_orbits`
+//! orbits *of the light curve* (from its first row, which for a run started with `--from`
+//! is not t = 0) are left out as the transient. The generalised Lomb–Scargle periodogram
+//! ([`crate::analysis::periodogram`]) of l_total is scanned between 0.2 and 5 P_orb; its
+//! highest peak, refined, gives the period, its uncertainty (Montgomery & O'Donoghue: a
+//! white-noise bound, optimistic when the light curve flickers) and the semi-amplitude of
+//! the fitted sinusoid.
+//!
+//! Rows whose time does not increase are taken for a run resumed from a checkpoint, which
+//! writes again from an earlier time: the later rows replace the earlier ones from that
+//! time on. A last line without its newline that does not parse is a row the running
+//! simulation is still writing and is ignored.
+//!
+//! Writes into the run folder: `lightcurve.png` (luminosities against orbit; l_total folded
+//! on the period with the fit), `periodogram.png` (power against period in P_orb, peak
+//! marked), `lightcurve.json` ([`LightcurveFigures`]). `run.toml` is optional: with
+//! `binary.period_days` the period is also given in days, with `binary.q` (or the masses)
+//! the period excess Patterson et al. (2005) predict for superhumps, ε = 0.18 q + 0.29 q².
+
+use std::f64::consts::TAU;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use plotters::style::RGBColor;
+use serde::Serialize;
+
+use crate::analysis::periodogram::{
+    OVERSAMPLE, PeriodEstimate, frequency_grid, lomb_scargle_grid, refine_peak,
+};
+use crate::io::atomic::write_atomic;
+use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
+
+/// The header line `lightcurve.csv` must start with: the one the run writes.
+pub const HEADER: &str = crate::io::timeseries::LIGHTCURVE_HEADER;
+
+/// Fewest rows (after the transient) the analysis accepts: with fewer the sinusoid's
+/// three parameters leave almost nothing to judge a period by.
+pub const MIN_ROWS: usize = 8;
+
+/// The search range, in orbital periods.
+pub const PERIOD_MIN_ORBITS: f64 = 0.2;
+pub const PERIOD_MAX_ORBITS: f64 = 5.0;
+
+/// One line of `lightcurve.csv`: code time, orbits, Σ m ε̇ in each region.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    pub t: f64,
+    pub orbit: f64,
+    pub l_total: f64,
+    pub l_disk: f64,
+    pub l_stream: f64,
+    pub l_spot: f64,
+}
+
+/// The binary's physical values, where `run.toml` gives them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct BinaryFigures {
+    /// q = M2/M1 (`binary.q`, or `binary.m2_msun / binary.m1_msun`).
+    pub q: Option<f64>,
+    /// `binary.period_days`.
+    pub orbital_period_days: Option<f64>,
+    /// The period found, in days (with `orbital_period_days`).
+    pub period_days: Option<f64>,
+    pub period_days_err: Option<f64>,
+    /// Patterson et al. (2005) superhump excess for this q: 0.18 q + 0.29 q².
+    pub excess_patterson2005: Option<f64>,
+}
+
+/// What the analysis measured (`lightcurve.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct LightcurveFigures {
+    /// Rows given, rows dropped as replaced by a resumed run, rows analysed.
+    pub rows_read: usize,
+    pub rows_superseded: usize,
+    pub rows_used: usize,
+    pub skip_orbits: f64,
+    /// The analysed stretch, in orbits (t/2π), and its length in periods found.
+    pub orbit_start: f64,
+    pub orbit_end: f64,
+    pub cycles: f64,
+    /// The period in code units (P_orb = 2π) and its 1σ error.
+    pub period: f64,
+    pub period_err: f64,
+    /// The period in orbital periods.
+    pub period_orbits: f64,
+    pub period_orbits_err: f64,
+    /// (P − P_orb)/P_orb.
+    pub period_excess: f64,
+    pub period_excess_err: f64,
+    /// Normalised periodogram power at the peak (0..1) and the white-noise false-alarm
+    /// probability of a peak that high in the range.
+    pub power: f64,
+    pub false_alarm: f64,
+    /// Fitted mean of l_total and semi-amplitude of the sinusoid (luminosity units).
+    pub mean: f64,
+    pub amplitude: f64,
+    pub amplitude_err: f64,
+    /// Semi-amplitude over the mean (null if the mean is not positive).
+    pub amplitude_rel: Option<f64>,
+    /// Peak-to-peak modulation in magnitudes, 2.5 log10((mean + A)/(mean − A)) (null if
+    /// mean ≤ A).
+    pub amplitude_mag: Option<f64>,
+    /// The peak lies at the end of the search range: the period may lie beyond it.
+    pub at_range_edge: bool,
+    /// `run.toml`'s binary, if any (set by [`analyse_lightcurve`], not by [`analyse`]).
+    pub binary: Option<BinaryFigures>,
+    /// Caveats, one line each.
+    pub notes: Vec<String>,
+    /// The full estimate in code units.
+    pub fit: PeriodEstimate,
+    /// (period / P_orb, power) of the scanned grid, for the plot.
+    #[serde(skip)]
+    pub periodogram: Vec<(f64, f64)>,
+    /// Index of the first row analysed in the rows after superseding ([`supersede`]).
+    #[serde(skip)]
+    pub first_used: usize,
+}
+
+/// What `analyse lightcurve` found and wrote.
+pub struct LightcurveReport {
+    pub csv: PathBuf,
+    pub figures: LightcurveFigures,
+    pub files: Vec<PathBuf>,
+}
+
+/// Reads `lightcurve.csv`. Errors, one line each naming the file: missing or unreadable,
+/// empty, a header other than [`HEADER`], a row with the wrong number of cells, a cell
+/// that is not a finite number (with its line number).
+pub fn read_lightcurve(path: &Path) -> Result<Vec<Row>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read the light curve", path.display()))?;
+    parse_lightcurve(&text).with_context(|| path.display().to_string())
+}
+
+/// [`read_lightcurve`] on the file's text; errors do not name the file.
+pub fn parse_lightcurve(text: &str) -> Result<Vec<Row>> {
+    let mut lines = text.lines().enumerate();
+    let header = match lines.next() {
+        Some((_, h)) => h.trim_start_matches('\u{feff}').trim(),
+        None => bail!("empty file; expected the header `{HEADER}`"),
+    };
+    if header != HEADER {
+        bail!("header is `{header}`, expected `{HEADER}`");
+    }
+    let names: Vec<&str> = HEADER.split(',').collect();
+    let unfinished_last = !text.ends_with('\n');
+    let total = text.lines().count();
+    let mut rows = Vec::new();
+    for (k, line) in lines {
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        match parse_row(line, &names) {
+            Ok(row) => rows.push(row),
+            // A simulation still writing its light curve leaves half a line at the end.
+            Err(_) if unfinished_last && k + 1 == total => {}
+            Err(e) => bail!("line {}: {e}", k + 1),
+        }
+    }
+    Ok(rows)
+}
+
+fn parse_row(line: &str, names: &[&str]) -> Result<Row> {
+    let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    if cells.len() != names.len() {
+        bail!("{} cells, expected {}", cells.len(), names.len());
+    }
+    let mut v = [0.0; 6];
+    for (i, (cell, name)) in cells.iter().zip(names).enumerate() {
+        let x: f64 = cell
+            .parse()
+            .map_err(|_| anyhow::anyhow!("column {name}: `{cell}` is not a number"))?;
+        if !x.is_finite() {
+            bail!("column {name}: {x} is not a finite number");
+        }
+        v[i] = x;
+    }
+    Ok(Row {
+        t: v[0],
+        orbit: v[1],
+        l_total: v[2],
+        l_disk: v[3],
+        l_stream: v[4],
+        l_spot: v[5],
+    })
+}
+
+/// The rows as the run finally had them: wherever the time does not increase (a resumed
+/// run writing again from its checkpoint), the earlier rows from that time on are dropped.
+/// Returns the rows and how many were dropped.
+pub fn supersede(rows: &[Row]) -> (Vec<Row>, usize) {
+    let mut kept: Vec<Row> = Vec::with_capacity(rows.len());
+    for r in rows {
+        while kept.last().is_some_and(|last| last.t >= r.t) {
+            kept.pop();
+        }
+        kept.push(*r);
+    }
+    let dropped = rows.len() - kept.len();
+    (kept, dropped)
+}
+
+/// The analysis without files: supersedes resumed stretches, skips the first
+/// `skip_orbits` orbits after the first row, finds the strongest period of l_total between
+/// [`PERIOD_MIN_ORBITS`] and [`PERIOD_MAX_ORBITS`] orbital periods.
+pub fn analyse(rows: &[Row], skip_orbits: f64) -> Result<LightcurveFigures> {
+    if !(skip_orbits >= 0.0 && skip_orbits.is_finite()) {
+        bail!("--skip-orbits {skip_orbits}: must be a number ≥ 0");
+    }
+    let (rows_all, superseded) = supersede(rows);
+    let Some(first) = rows_all.first() else {
+        bail!("no rows; need at least {MIN_ROWS}");
+    };
+    let t_cut = first.t + skip_orbits * TAU;
+    let first_used = rows_all.partition_point(|r| r.t < t_cut);
+    let used = &rows_all[first_used..];
+    if used.len() < MIN_ROWS && first_used == 0 {
+        bail!("only {} rows; need at least {MIN_ROWS}", used.len());
+    }
+    if used.len() < MIN_ROWS {
+        bail!(
+            "only {} rows after skipping the first {skip_orbits} orbits (of {} rows); need at least {MIN_ROWS}",
+            used.len(),
+            rows_all.len()
+        );
+    }
+    let t: Vec<f64> = used.iter().map(|r| r.t).collect();
+    let y: Vec<f64> = used.iter().map(|r| r.l_total).collect();
+    let span = t[t.len() - 1] - t[0];
+    if !(span > 0.0) {
+        bail!("the rows used cover no time");
+    }
+    let (f_min, f_max) = (
+        1.0 / (PERIOD_MAX_ORBITS * TAU),
+        1.0 / (PERIOD_MIN_ORBITS * TAU),
+    );
+    let grid = frequency_grid(span, f_min, f_max, OVERSAMPLE)?;
+    let power = lomb_scargle_grid(&t, &y, &grid);
+    let est = refine_peak(&t, &y, &grid, &power).context("l_total")?;
+    let periodogram: Vec<(f64, f64)> = (0..grid.len)
+        .map(|k| (1.0 / (grid.frequency(k) * TAU), power[k]))
+        .collect();
+
+    let period_orbits = est.period / TAU;
+    let period_orbits_err = est.period_err / TAU;
+    let cycles = span / est.period;
+    // Within one grid step of either end: the maximum may lie outside the range.
+    let at_range_edge = est.frequency - f_min < grid.step || f_max - est.frequency < grid.step;
+    let (amplitude_rel, amplitude_mag) = if est.mean > 0.0 {
+        let rel = est.amplitude / est.mean;
+        let mag = (rel < 1.0).then(|| 2.5 * ((1.0 + rel) / (1.0 - rel)).log10());
+        (Some(rel), mag)
+    } else {
+        (None, None)
+    };
+    let mut notes = Vec::new();
+    if superseded > 0 {
+        notes.push(format!(
+            "{superseded} rows replaced by a resumed run's (time went back)"
+        ));
+    }
+    if at_range_edge {
+        notes.push(format!(
+            "the peak lies at the end of the search range ({PERIOD_MIN_ORBITS}..{PERIOD_MAX_ORBITS} P_orb): the true period may lie outside it"
+        ));
+    }
+    if cycles < 3.0 {
+        notes.push(format!(
+            "the light curve covers only {cycles:.1} cycles of the period: the figures are rough"
+        ));
+    }
+    if est.false_alarm > 0.01 {
+        notes.push(format!(
+            "false-alarm probability {:.2}: the peak may be noise",
+            est.false_alarm
+        ));
+    }
+    Ok(LightcurveFigures {
+        rows_read: rows.len(),
+        rows_superseded: superseded,
+        rows_used: used.len(),
+        skip_orbits,
+        orbit_start: t[0] / TAU,
+        orbit_end: t[t.len() - 1] / TAU,
+        cycles,
+        period: est.period,
+        period_err: est.period_err,
+        period_orbits,
+        period_orbits_err,
+        period_excess: period_orbits - 1.0,
+        period_excess_err: period_orbits_err,
+        power: est.power,
+        false_alarm: est.false_alarm,
+        mean: est.mean,
+        amplitude: est.amplitude,
+        amplitude_err: est.amplitude_err,
+        amplitude_rel,
+        amplitude_mag,
+        at_range_edge,
+        binary: None,
+        notes,
+        fit: est,
+        periodogram,
+        first_used,
+    })
+}
+
+impl LightcurveFigures {
+    /// Adds the physical values of `run.toml`'s `[binary]`.
+    pub fn with_binary(mut self, q: Option<f64>, orbital_period_days: Option<f64>) -> Self {
+        if q.is_none() && orbital_period_days.is_none() {
+            return self;
+        }
+        self.binary = Some(BinaryFigures {
+            q,
+            orbital_period_days,
+            period_days: orbital_period_days.map(|p| p * self.period_orbits),
+            period_days_err: orbital_period_days.map(|p| p * self.period_orbits_err),
+            excess_patterson2005: q.map(|q| 0.18 * q + 0.29 * q * q),
+        });
+        self
+    }
+}
+
+/// `q` and `period_days` of `run.toml`'s `[binary]`, read leniently: no file, no table or
+/// no keys give `None`s; a file that does not parse gives a note instead.
+fn binary_of(run: &Path) -> (Option<f64>, Option<f64>, Option<String>) {
+    let path = run.join("run.toml");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return (None, None, None);
+    };
+    let value: toml::Value = match text.parse() {
+        Ok(v) => v,
+        Err(e) => {
+            let first = e.to_string();
+            let first = first.lines().next().unwrap_or("").trim().to_string();
+            return (
+                None,
+                None,
+                Some(format!(
+                    "{}: not read ({first}); no physical values",
+                    path.display()
+                )),
+            );
+        }
+    };
+    let Some(b) = value.get("binary") else {
+        return (None, None, None);
+    };
+    let num = |k: &str| {
+        b.get(k)
+            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+            .filter(|v| v.is_finite() && *v > 0.0)
+    };
+    let q = num("q").or_else(|| Some(num("m2_msun")? / num("m1_msun")?));
+    (q, num("period_days"), None)
+}
+
+/// Reads `run/lightcurve.csv` (and `run/run.toml` if there), analyses it, writes the two
+/// pictures and the JSON into `run`.
+pub fn analyse_lightcurve(run: &Path, skip_orbits: f64) -> Result<LightcurveReport> {
+    let csv = run.join("lightcurve.csv");
+    let rows = read_lightcurve(&csv)?;
+    let figures = analyse(&rows, skip_orbits).with_context(|| csv.display().to_string())?;
+    let (q, days, note) = binary_of(run);
+    let mut figures = figures.with_binary(q, days);
+    figures.notes.extend(note);
+    let (rows, _) = supersede(&rows);
+
+    let lc_png = run.join("lightcurve.png");
+    plot_panels(&lc_png, (1800, 600), &lightcurve_panels(&rows, &figures))?;
+    let pg_png = run.join("periodogram.png");
+    plot_panels(&pg_png, (1100, 550), &[periodogram_panel(&figures)])?;
+    let json = run.join("lightcurve.json");
+    let mut text = serde_json::to_string_pretty(&figures)?;
+    text.push('\n');
+    write_atomic(&json, text.as_bytes())?;
+    Ok(LightcurveReport {
+        csv,
+        figures,
+        files: vec![lc_png, pg_png, json],
+    })
+}
+
+const BLACK: RGBColor = RGBColor(0, 0, 0);
+const GREY: RGBColor = RGBColor(140, 140, 140);
+const ORANGE: RGBColor = RGBColor(230, 120, 20);
+const RED: RGBColor = RGBColor(200, 30, 30);
+
+/// (lo, hi) of the values, padded by 6% (a flat series by ±1 or ±10% of its value).
+fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (0.0, 1.0);
+    }
+    let pad = if hi > lo {
+        0.06 * (hi - lo)
+    } else {
+        (0.1 * lo.abs()).max(1.0)
+    };
+    (lo - pad, hi + pad)
+}
+
+fn lightcurve_panels(rows: &[Row], f: &LightcurveFigures) -> Vec<Panel> {
+    let orbit = |r: &Row| r.t / TAU;
+    let curve = |g: &dyn Fn(&Row) -> f64| rows.iter().map(|r| (orbit(r), g(r))).collect();
+    let x_range = {
+        let (a, b) = (orbit(&rows[0]), orbit(&rows[rows.len() - 1]));
+        if b > a { (a, b) } else { (a - 0.5, a + 0.5) }
+    };
+    let y_range = padded_range(
+        rows.iter()
+            .flat_map(|r| [r.l_total, r.l_disk, r.l_stream, r.l_spot]),
+    );
+    let mut series = vec![
+        Series {
+            label: Some("total".into()),
+            points: curve(&|r| r.l_total),
+            color: BLACK,
+            style: SeriesStyle::Line,
+        },
+        Series {
+            label: Some("disk".into()),
+            points: curve(&|r| r.l_disk),
+            color: PALETTE[1],
+            style: SeriesStyle::Line,
+        },
+        Series {
+            label: Some("stream".into()),
+            points: curve(&|r| r.l_stream),
+            color: PALETTE[2],
+            style: SeriesStyle::Line,
+        },
+        Series {
+            label: Some("hot spot".into()),
+            points: curve(&|r| r.l_spot),
+            color: ORANGE,
+            style: SeriesStyle::Line,
+        },
+    ];
+    if f.first_used > 0 {
+        series.push(Series {
+            label: Some("end of transient".into()),
+            points: vec![(f.orbit_start, y_range.0), (f.orbit_start, y_range.1)],
+            color: GREY,
+            style: SeriesStyle::Dashed,
+        });
+    }
+    let used = &rows[f.first_used..];
+    let fit = &f.fit;
+    // Phase 0 at the fitted maximum; two cycles shown.
+    let phase = |t: f64| (t * fit.frequency - fit.phase / TAU).rem_euclid(1.0);
+    let mut folded: Vec<(f64, f64)> = used.iter().map(|r| (phase(r.t), r.l_total)).collect();
+    folded.extend(used.iter().map(|r| (phase(r.t) + 1.0, r.l_total)));
+    let model: Vec<(f64, f64)> = (0..=400)
+        .map(|k| {
+            let x = 2.0 * k as f64 / 400.0;
+            (x, fit.mean + fit.amplitude * (TAU * x).cos())
+        })
+        .collect();
+    let fold_range = padded_range(
+        used.iter()
+            .map(|r| r.l_total)
+            .chain(model.iter().map(|p| p.1)),
+    );
+    vec![
+        Panel {
+            title: "light curve".into(),
+            x_label: "orbit (t / P_orb)".into(),
+            y_label: "luminosity Σ m dε/dt".into(),
+            x_range,
+            y_range,
+            series,
+        },
+        Panel {
+            title: format!(
+                "l_total folded on P = {} P_orb",
+                plus_minus(f.period_orbits, f.period_orbits_err)
+            ),
+            x_label: "phase (cycles, 0 at the fitted maximum)".into(),
+            y_label: "l_total".into(),
+            x_range: (0.0, 2.0),
+            y_range: fold_range,
+            series: vec![
+                Series {
+                    label: Some(format!("orbits {:.1} to {:.1}", f.orbit_start, f.orbit_end)),
+                    points: folded,
+                    color: PALETTE[1],
+                    style: SeriesStyle::Dots,
+                },
+                Series {
+                    label: Some("fitted sinusoid".into()),
+                    points: model,
+                    color: BLACK,
+                    style: SeriesStyle::Dashed,
+                },
+            ],
+        },
+    ]
+}
+
+fn periodogram_panel(f: &LightcurveFigures) -> Panel {
+    let top = f
+        .periodogram
+        .iter()
+        .map(|p| p.1)
+        .fold(0.0f64, f64::max)
+        .max(1e-3)
+        * 1.15;
+    Panel {
+        title: format!(
+            "generalised Lomb–Scargle periodogram of l_total ({} rows)",
+            f.rows_used
+        ),
+        x_label: "period / P_orb".into(),
+        y_label: "normalised power".into(),
+        x_range: (PERIOD_MIN_ORBITS, PERIOD_MAX_ORBITS),
+        y_range: (0.0, top),
+        series: vec![
+            Series {
+                label: None,
+                points: f.periodogram.clone(),
+                color: PALETTE[1],
+                style: SeriesStyle::Line,
+            },
+            Series {
+                label: Some("P_orb".into()),
+                points: vec![(1.0, 0.0), (1.0, top)],
+                color: GREY,
+                style: SeriesStyle::Dashed,
+            },
+            Series {
+                label: Some(format!(
+                    "peak: P = {} P_orb",
+                    plus_minus(f.period_orbits, f.period_orbits_err)
+                )),
+                points: vec![(f.period_orbits, 0.0), (f.period_orbits, f.power)],
+                color: RED,
+                style: SeriesStyle::Dashed,
+            },
+        ],
+    }
+}
+
+/// "v ± e" with two significant digits of the error (six decimals at most shown for v if
+/// the error is not finite or zero).
+pub fn plus_minus(v: f64, e: f64) -> String {
+    if !(e.is_finite() && e > 0.0) {
+        return format!("{v:.6} ± {e}");
+    }
+    let decimals = (1 - e.log10().floor() as i32).clamp(0, 12) as usize;
+    format!("{v:.decimals$} ± {e:.decimals$}")
+}
+
+impl LightcurveReport {
+    /// A short human summary, several lines, each ending in a newline.
+    pub fn summary(&self) -> String {
+        let f = &self.figures;
+        let mut s = String::new();
+        let _ = write!(
+            s,
+            "{}: {} rows, {} used (orbits {:.2} to {:.2}",
+            self.csv.display(),
+            f.rows_read,
+            f.rows_used,
+            f.orbit_start,
+            f.orbit_end
+        );
+        if f.skip_orbits > 0.0 {
+            let _ = write!(s, "; first {} orbits skipped", f.skip_orbits);
+        }
+        let _ = writeln!(s, ")");
+        let _ = writeln!(
+            s,
+            "period {} P_orb ({} code units); (P − P_orb)/P_orb = {} %",
+            plus_minus(f.period_orbits, f.period_orbits_err),
+            plus_minus(f.period, f.period_err),
+            plus_minus(100.0 * f.period_excess, 100.0 * f.period_excess_err)
+        );
+        if let Some(b) = &f.binary {
+            if let (Some(p), Some(e), Some(po)) =
+                (b.period_days, b.period_days_err, b.orbital_period_days)
+            {
+                let _ = writeln!(s, "        = {} d (P_orb = {po} d)", plus_minus(p, e));
+            }
+            if let (Some(q), Some(eps)) = (b.q, b.excess_patterson2005) {
+                let _ = writeln!(
+                    s,
+                    "        superhump excess expected at q = {q}: {:.2} % (Patterson et al. 2005)",
+                    100.0 * eps
+                );
+            }
+        }
+        let amp = match (f.amplitude_rel, f.amplitude_mag) {
+            (Some(r), Some(m)) => format!(
+                "semi-amplitude {} % of the mean ({m:.4} mag peak to peak)",
+                plus_minus(100.0 * r, 100.0 * f.amplitude_err / f.mean)
+            ),
+            (Some(r), None) => format!("semi-amplitude {:.2} % of the mean", 100.0 * r),
+            _ => format!(
+                "semi-amplitude {} (the mean is not positive)",
+                plus_minus(f.amplitude, f.amplitude_err)
+            ),
+        };
+        let fap = if f.false_alarm > 1e-300 {
+            format!("{:.1e}", f.false_alarm)
+        } else {
+            "< 1e-300".into()
+        };
+        let _ = writeln!(
+            s,
+            "modulation: {amp}; power {:.3}, false-alarm probability {fap}",
+            f.power
+        );
+        for n in &f.notes {
+            let _ = writeln!(s, "note: {n}");
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    /// A light curve sampled every 0.01–0.05 code times (uneven, like "every few steps" of
+    /// a varying time step) over `orbits` orbits: a disk modulated at `period_orbits` with
+    /// relative semi-amplitude `rel`, a steady stream and spot, white noise.
+    fn synthetic(seed: u64, orbits: f64, period_orbits: f64, rel: f64) -> Vec<Row> {
+        let mut rng = Rng::new(seed);
+        let mut rows = Vec::new();
+        let mut t = 0.0;
+        while t < orbits * TAU {
+            let disk = 2.0 * (1.0 + rel * (t / period_orbits + 0.3).cos()) + 0.05 * rng.normal();
+            let (stream, spot) = (0.2, 0.3 + 0.01 * rng.normal());
+            rows.push(Row {
+                t,
+                orbit: t / TAU,
+                l_total: disk + stream + spot,
+                l_disk: disk,
+                l_stream: stream,
+                l_spot: spot,
+            });
+            t += 0.01 + 0.04 * rng.uniform();
+        }
+        rows
+    }
+
+    #[test]
+    fn finds_a_superhump_period_and_its_amplitude() {
+        let rows = synthetic(3, 30.0, 1.035, 0.05);
+        let f = analyse(&rows, 5.0).unwrap();
+        // 3σ of the stated (white-noise, here exact) uncertainty; seed fixed.
+        assert!(
+            (f.period_orbits - 1.035).abs() < 3.0 * f.period_orbits_err,
+            "{f:?}"
+        );
+        // σ_f ≈ √6·0.051/(π·157·0.1·√5200) ≈ 3.5e-5, σ_P = σ_f P² ≈ 2.3e-4 P_orb: the test
+        // is not vacuous.
+        assert!(f.period_orbits_err < 1e-3, "{f:?}");
+        assert!((f.period - 1.035 * TAU).abs() < 3.0 * f.period_err);
+        assert!((f.period_excess - 0.035).abs() < 3.0 * f.period_excess_err);
+        // Semi-amplitude 0.1 on a mean of 2.5: 4%. σ_A/A ≈ √(2/5200)·0.051/0.1 ≈ 1%: 5%.
+        assert!(
+            (f.amplitude_rel.unwrap() - 0.04).abs() < 0.05 * 0.04,
+            "{f:?}"
+        );
+        let mag = 2.5 * (1.04f64 / 0.96).log10();
+        assert!((f.amplitude_mag.unwrap() - mag).abs() < 0.05 * mag);
+        assert!(
+            f.power > 0.5 && f.false_alarm < 1e-6 && !f.at_range_edge,
+            "{f:?}"
+        );
+        // Rows before orbit 5 were skipped.
+        assert!((f.orbit_start - 5.0).abs() < 0.01 && f.rows_used < f.rows_read);
+        assert_eq!(f.rows_used + f.first_used, rows.len());
+        assert!(f.notes.is_empty(), "{:?}", f.notes);
+        let f = f.with_binary(Some(0.1), Some(0.07));
+        let b = f.binary.unwrap();
+        assert!((b.period_days.unwrap() - 0.07 * f.period_orbits).abs() < 1e-12);
+        assert!((b.excess_patterson2005.unwrap() - 0.0209).abs() < 1e-12);
+    }
+
+    #[test]
+    fn resumed_rows_replace_the_earlier_ones() {
+        let t = [0.0, 1.0, 2.0, 3.0, 1.5, 2.5, 3.5];
+        let rows: Vec<Row> = t
+            .iter()
+            .map(|&t| Row {
+                t,
+                orbit: t / TAU,
+                l_total: 1.0,
+                l_disk: 1.0,
+                l_stream: 0.0,
+                l_spot: 0.0,
+            })
+            .collect();
+        let (kept, dropped) = supersede(&rows);
+        let kt: Vec<f64> = kept.iter().map(|r| r.t).collect();
+        assert_eq!(kt, vec![0.0, 1.0, 1.5, 2.5, 3.5]);
+        assert_eq!(dropped, 2);
+    }
+
+    #[test]
+    fn parse_errors_name_the_line() {
+        // The header of the brief, which the run writes (io::timeseries).
+        assert_eq!(HEADER, "t,orbit,l_total,l_disk,l_stream,l_spot");
+        let ok = format!("{HEADER}\n0,0,1,1,0,0\n0.1,0.0159,1,1,0,0\n");
+        assert_eq!(parse_lightcurve(&ok).unwrap().len(), 2);
+        let e = parse_lightcurve("t,orbit,l_total\n0,0,1\n").unwrap_err();
+        assert!(e.to_string().contains("header is `t,orbit,l_total`"), "{e}");
+        let e = parse_lightcurve(&format!("{HEADER}\n0,0,1,1,0,0\n0.1,0,x1,1,0,0\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 3") && e.contains("l_total") && e.contains("x1"),
+            "{e}"
+        );
+        let e = parse_lightcurve(&format!("{HEADER}\n0,0,1,1,0\n")).unwrap_err();
+        assert!(e.to_string().contains("line 2: 5 cells"), "{e}");
+        let e = parse_lightcurve(&format!("{HEADER}\n0,0,NaN,1,0,0\n")).unwrap_err();
+        assert!(e.to_string().contains("not a finite number"), "{e}");
+        assert!(parse_lightcurve("").is_err());
+        // Half a last row (the run is writing it) is left out; a whole one is not.
+        let partial = format!("{HEADER}\n0,0,1,1,0,0\n0.1,0.01");
+        assert_eq!(parse_lightcurve(&partial).unwrap().len(), 1);
+        let whole = format!("{HEADER}\r\n0,0,1,1,0,0\r\n0.1,0.01,1,1,0,0");
+        assert_eq!(parse_lightcurve(&whole).unwrap().len(), 2);
+    }
+
+    #[test]
+    fn too_few_rows_or_a_flat_curve_are_errors() {
+        let rows = synthetic(4, 3.0, 1.0, 0.05);
+        let e = analyse(&rows, 3.0).unwrap_err().to_string();
+        assert!(
+            e.contains("rows after skipping") && e.contains("at least 8"),
+            "{e}"
+        );
+        assert!(analyse(&rows, -1.0).is_err());
+        assert!(analyse(&[], 0.0).is_err());
+        let flat: Vec<Row> = rows.iter().map(|r| Row { l_total: 1.0, ..*r }).collect();
+        let e = format!("{:#}", analyse(&flat, 0.0).unwrap_err());
+        assert!(e.contains("constant"), "{e}");
+    }
+
+    #[test]
+    fn plus_minus_shows_two_digits_of_the_error() {
+        assert_eq!(plus_minus(1.034_567, 0.002_34), "1.0346 ± 0.0023");
+        assert_eq!(plus_minus(123.4, 12.0), "123 ± 12");
+    }
+}

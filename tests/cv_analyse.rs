@@ -1,0 +1,76 @@
+//! Guards `sphdisk analyse cv` as users call it: a short cataclysmic-variable run (the
+//! problem file `cv2d.toml`, 1.5 orbits at a quarter of its stream rate) gives, per
+//! snapshot, a row of `cv_evolution.csv`, and `cv.json` with a disk between half the
+//! circularisation radius and the Roche lobe and a bright spot; a folder that is not a run
+//! fails with one line naming the file.
+
+mod common;
+
+#[test]
+fn a_short_cv_run_gives_its_disk_and_bright_spot() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cv");
+    let out_s = out.to_string_lossy().into_owned();
+    let problem = common::problem_file("cv2d.toml");
+    let (code, _, err) = common::sphdisk_cli(
+        None,
+        &[
+            "run",
+            &problem,
+            "--set",
+            "stream.particles_per_orbit=500",
+            "--set",
+            "time.end=9.42",
+            "--set",
+            "output.interval=3.14",
+            "--out",
+            &out_s,
+            "--quiet",
+        ],
+    );
+    assert_eq!(code, 0, "run: {err}");
+
+    let (code, stdout, err) = common::sphdisk_cli(None, &["analyse", "cv", &out_s]);
+    assert_eq!(code, 0, "analyse: {err}");
+    assert!(
+        stdout.contains("R90") && stdout.contains("cv.json"),
+        "{stdout}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    let num = |k: &str| {
+        json[k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{k} is not a number in {json:#}"))
+    };
+    let (r90, r_circ, lobe) = (
+        num("disk_radius_90"),
+        num("r_circ"),
+        num("roche_lobe_radius"),
+    );
+    assert!(
+        r90 > 0.5 * r_circ && r90 < lobe,
+        "R90 = {r90}: not between r_circ/2 = {} and the Roche lobe {lobe}",
+        0.5 * r_circ
+    );
+    let spot = num("spot_azimuth_deg");
+    assert!((0.0..360.0).contains(&spot), "{spot}");
+    // 2D: no overflow figures.
+    assert!(json.get("overflow_fraction").is_none(), "{json:#}");
+    // A row per snapshot (t = 0, 1, 2 × 3.14 and the end state), each with its time.
+    let csv = std::fs::read_to_string(out.join("cv_evolution.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(rows[0].starts_with("snapshot,t,orbit,"), "{}", rows[0]);
+    assert_eq!(rows.len(), 1 + num("snapshots") as usize, "{csv}");
+    assert!(rows.len() >= 4, "{csv}");
+}
+
+#[test]
+fn a_folder_without_a_run_is_one_line_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().to_string_lossy().into_owned();
+    let (code, _, err) = common::sphdisk_cli(None, &["analyse", "cv", &path]);
+    assert_eq!(code, 2);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("run.toml"), "{err}");
+}

@@ -1,0 +1,100 @@
+//! Guards `sphdisk analyse lightcurve` as users call it: a run folder with a light curve (no
+//! run.toml needed) gives the period with error bars, two pictures and a JSON; a file that
+//! is not a light curve fails with one line naming it.
+
+use std::f64::consts::TAU;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use sphdisk::rng::Rng;
+
+mod common;
+
+fn is_png(path: &Path) -> bool {
+    std::fs::read(path).is_ok_and(|b| b.len() > 1000 && b.starts_with(b"\x89PNG\r\n\x1a\n"))
+}
+
+/// 40 orbits sampled at uneven steps (0.02–0.1 code times), l_total modulated at exactly
+/// P_orb = 2π with a 5% semi-amplitude, plus white noise; an initial transient (a rising
+/// disk) in the first 3 orbits that `--skip-orbits 3` leaves out.
+fn synthetic_csv() -> String {
+    let mut rng = Rng::new(42);
+    let mut csv = String::from("t,orbit,l_total,l_disk,l_stream,l_spot\n");
+    let mut t = 0.0f64;
+    while t < 40.0 * TAU {
+        let rise = 1.0 - (-t / 3.0).exp();
+        let disk = 2.0 * rise * (1.0 + 0.05 * (t + 1.0).cos()) + 0.05 * rng.normal();
+        let (stream, spot) = (0.1, 0.3 + 0.02 * rng.normal());
+        let total = disk + stream + spot;
+        let _ = writeln!(
+            csv,
+            "{t:e},{:e},{total:e},{disk:e},{stream:e},{spot:e}",
+            t / TAU
+        );
+        t += 0.02 + 0.08 * rng.uniform();
+    }
+    csv
+}
+
+#[test]
+fn a_light_curve_gives_its_period_pictures_and_json() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("lightcurve.csv"), synthetic_csv()).unwrap();
+    let run = dir.path().to_string_lossy().into_owned();
+    let (code, out, err) =
+        common::sphdisk_cli(None, &["analyse", "lightcurve", &run, "--skip-orbits", "3"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("P_orb") && out.contains("mag peak to peak"),
+        "{out}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("lightcurve.json")).unwrap())
+            .unwrap();
+    let num = |k: &str| json[k].as_f64().unwrap_or_else(|| panic!("{k} in {json}"));
+    let (p, e) = (num("period"), num("period_err"));
+    // Within 3 of its stated σ (the seed is fixed; 3σ fails 0.3% of seeds), and σ small
+    // enough that the check means something: σ_f ≈ √6·0.05/(π·232·0.1·√4000) ≈ 2.7e-5,
+    // σ_P = σ_f·(2π)² ≈ 1e-3, under 2e-4 of the period.
+    assert!((p - TAU).abs() < 3.0 * e, "period {p} ± {e}");
+    assert!(e > 0.0 && e < 1e-3 * TAU, "period_err {e}");
+    assert!((num("period_orbits") - 1.0).abs() < 3.0 * num("period_orbits_err"));
+    // Semi-amplitude 0.1 on a mean of 2.4: 4.2% (the stated σ is ~1% of that).
+    assert!((num("amplitude_rel") - 0.1 / 2.4).abs() < 0.003, "{json}");
+    assert!(
+        num("orbit_start") >= 3.0 && num("orbit_start") < 3.1,
+        "{json}"
+    );
+    assert!(json["binary"].is_null(), "no run.toml: {json}");
+    for png in ["lightcurve.png", "periodogram.png"] {
+        assert!(is_png(&dir.path().join(png)), "{png}");
+    }
+}
+
+#[test]
+fn a_wrong_header_fails_with_one_line_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("lightcurve.csv");
+    std::fs::write(&csv, "t,l_total\n0,1\n1,2\n").unwrap();
+    let (code, out, err) = common::sphdisk_cli(
+        None,
+        &["analyse", "lightcurve", &dir.path().to_string_lossy()],
+    );
+    assert_ne!(code, 0, "{out}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains(&*csv.to_string_lossy()) && err.contains("header"),
+        "{err}"
+    );
+    assert!(!dir.path().join("lightcurve.json").exists());
+
+    // No light curve at all: also one line naming the file.
+    let empty = tempfile::tempdir().unwrap();
+    let (code, _, err) = common::sphdisk_cli(
+        None,
+        &["analyse", "lightcurve", &empty.path().to_string_lossy()],
+    );
+    assert_ne!(code, 0);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("lightcurve.csv"), "{err}");
+}
