@@ -171,6 +171,10 @@ enum AnalyseCommand {
         /// Orbits at the start of the light curve to leave out as the transient.
         #[arg(long, default_value_t = 0.0)]
         skip_orbits: f64,
+        /// Fit a floating mean only, not a cubic trend in time with the sinusoid (a disk
+        /// still building up then shows as a long period).
+        #[arg(long)]
+        no_detrend: bool,
     },
     /// A cataclysmic variable: the disk's radii and eccentricity, the bright spot's azimuth
     /// and, in 3D, the stream's overflow at each snapshot (cv_evolution.csv, cv.json).
@@ -383,10 +387,18 @@ fn real_main(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Analyse {
-            what: AnalyseCommand::Lightcurve { run, skip_orbits },
+            what:
+                AnalyseCommand::Lightcurve {
+                    run,
+                    skip_orbits,
+                    no_detrend,
+                },
         } => {
-            let report =
-                sphdisk::analysis::lightcurve_report::analyse_lightcurve(&run, skip_orbits)?;
+            let report = sphdisk::analysis::lightcurve_report::analyse_lightcurve(
+                &run,
+                skip_orbits,
+                !no_detrend,
+            )?;
             print!("{}", report.summary());
             for f in &report.files {
                 println!("wrote {}", f.display());

@@ -1,6 +1,7 @@
 //! Guards `sphdisk analyse lightcurve` as users call it: a run folder with a light curve (no
-//! run.toml needed) gives the period with error bars, two pictures and a JSON; a file that
-//! is not a light curve fails with one line naming it.
+//! run.toml needed) gives the period with error bars, two pictures and a JSON; a disk that
+//! grows is detrended unless `--no-detrend`; a file that is not a light curve fails with one
+//! line naming it.
 
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -66,9 +67,74 @@ fn a_light_curve_gives_its_period_pictures_and_json() {
         "{json}"
     );
     assert!(json["binary"].is_null(), "no run.toml: {json}");
+    // Detrended by default; the keys added beside the old ones.
+    assert_eq!(json["detrended"], true, "{json}");
+    assert_eq!(json["trend_degree"], 3, "{json}");
+    assert!(num("amplitude_rel_err") > 0.0 && num("amplitude_rel_err") < 0.003);
+    assert!((num("trend_start") - 2.4).abs() < 0.1 && (num("trend_end") - 2.4).abs() < 0.1);
+    assert!(out.contains("trend: polynomial of degree 3"), "{out}");
     for png in ["lightcurve.png", "periodogram.png"] {
         assert!(is_png(&dir.path().join(png)), "{png}");
     }
+}
+
+/// 10 orbits of a disk that doubles linearly, modulated at 1.05 P_orb with a 3% semi-amplitude
+/// of its light, plus white noise; no transient.
+fn growing_csv() -> String {
+    let mut rng = Rng::new(43);
+    let mut csv = String::from("t,orbit,l_total,l_disk,l_stream,l_spot\n");
+    let span = 10.0 * TAU;
+    let mut t = 0.0f64;
+    while t < span {
+        let disk =
+            1e-13 * (1.0 + t / span) * (1.0 + 0.03 * (t / 1.05).cos()) + 1e-15 * rng.normal();
+        let (stream, spot) = (0.0, 1e-14);
+        let total = disk + stream + spot;
+        let _ = writeln!(
+            csv,
+            "{t:e},{:e},{total:e},{disk:e},{stream:e},{spot:e}",
+            t / TAU
+        );
+        t += 0.02 + 0.08 * rng.uniform();
+    }
+    csv
+}
+
+#[test]
+fn a_growing_disk_is_detrended_unless_told_not_to() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("lightcurve.csv"), growing_csv()).unwrap();
+    let run = dir.path().to_string_lossy().into_owned();
+    let json = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("lightcurve.json")).unwrap())
+            .unwrap()
+    };
+    let num =
+        |j: &serde_json::Value, k: &str| j[k].as_f64().unwrap_or_else(|| panic!("{k} in {j}"));
+
+    let (code, out, err) = common::sphdisk_cli(None, &["analyse", "lightcurve", &run]);
+    assert_eq!(code, 0, "{err}");
+    let j = json();
+    let (p, e) = (num(&j, "period_orbits"), num(&j, "period_orbits_err"));
+    // ~1000 rows over 10 orbits: σ_P ≈ 1e-3 P_orb; 3σ, seed fixed.
+    assert!((p - 1.05).abs() < 3.0 * e && e < 5e-3, "{p} ± {e}\n{out}");
+    // 3% of the disk; l_total carries a constant 1e-14 more (mean 1.6e-13): 2.8%.
+    let rel = num(&j, "amplitude_rel");
+    assert!((rel - 0.028).abs() < 0.1 * 0.028, "{rel}\n{out}");
+    assert!(out.contains("% of the mean trend"), "{out}");
+    for png in ["lightcurve.png", "periodogram.png"] {
+        assert!(is_png(&dir.path().join(png)), "{png}");
+    }
+
+    let (code, out, err) =
+        common::sphdisk_cli(None, &["analyse", "lightcurve", &run, "--no-detrend"]);
+    assert_eq!(code, 0, "{err}");
+    let j = json();
+    assert_eq!(j["detrended"], false, "{j}");
+    assert_eq!(j["trend_degree"], 0, "{j}");
+    // The rise wins: the peak lies at the long end of the range, far from 1.05 P_orb.
+    assert!(num(&j, "period_orbits") > 3.0, "{out}");
+    assert!(out.contains("trend: none (--no-detrend)"), "{out}");
 }
 
 #[test]

@@ -17,14 +17,7 @@ use sphdisk::physics::eos::Eos;
 use sphdisk::sweep::{Physics, SweepStats};
 
 fn binary(q: f64) -> Binary {
-    Binary::new(&BinaryParams {
-        q: Some(q),
-        m1_msun: None,
-        m2_msun: None,
-        period_days: None,
-        accretor_radius: 0.01,
-        escape_radius: 2.5,
-    })
+    Binary::new(&BinaryParams::with_q(q))
 }
 
 /// A test particle on an orbit about the accretor, perturbed by the donor, for 100 orbits

@@ -954,14 +954,7 @@ mod tests {
     use crate::physics::binary::BinaryParams;
 
     fn binary(q: f64) -> Binary {
-        Binary::new(&BinaryParams {
-            q: Some(q),
-            m1_msun: None,
-            m2_msun: None,
-            period_days: None,
-            accretor_radius: 0.02,
-            escape_radius: 2.5,
-        })
+        Binary::new(&BinaryParams::with_q(q))
     }
 
     /// Gas at `x` (orbital plane) moving with the inertial velocity `u` relative to the

@@ -60,6 +60,18 @@ fn default_escape_radius() -> f64 {
 }
 
 impl BinaryParams {
+    /// A binary of mass ratio `q` in code units, with the default accretor and escape radii.
+    pub fn with_q(q: f64) -> Self {
+        Self {
+            q: Some(q),
+            m1_msun: None,
+            m2_msun: None,
+            period_days: None,
+            accretor_radius: default_accretor_radius(),
+            escape_radius: default_escape_radius(),
+        }
+    }
+
     /// The mass ratio, however it was given.
     pub fn mass_ratio(&self) -> f64 {
         match (self.q, self.m1_msun, self.m2_msun) {
@@ -348,14 +360,7 @@ mod tests {
     use super::*;
 
     fn binary(q: f64) -> Binary {
-        Binary::new(&BinaryParams {
-            q: Some(q),
-            m1_msun: None,
-            m2_msun: None,
-            period_days: None,
-            accretor_radius: 0.01,
-            escape_radius: 2.5,
-        })
+        Binary::new(&BinaryParams::with_q(q))
     }
 
     /// The real forces plus the centrifugal force are −∇Φ_Roche: the frame and the forces
