@@ -49,22 +49,29 @@ pub fn rhs<const D: usize>(
     stats
 }
 
-/// Adds the central point mass's acceleration, if there is one, and a binary donor's.
-pub fn add_gravity<const D: usize>(p: &mut Particles<D>, phys: &Physics<D>) {
-    if let Some(g) = &phys.gravity {
-        for i in 0..p.len() {
-            let a = g.acceleration(&p.position(i));
-            for d in 0..D {
-                p.acc[d][i] += a[d];
-            }
+/// The external gravity at `x`: the central point mass's, if there is one, and a binary
+/// donor's.
+#[inline]
+pub fn external_acceleration<const D: usize>(phys: &Physics<D>, x: &[f64; D]) -> [f64; D] {
+    let mut a = phys.gravity.map_or([0.0; D], |g| g.acceleration(x));
+    if let Some(b) = &phys.binary {
+        let a2 = b.donor_acceleration(x);
+        for d in 0..D {
+            a[d] += a2[d];
         }
     }
-    if let Some(b) = &phys.binary {
-        for i in 0..p.len() {
-            let a = b.donor_acceleration(&p.position(i));
-            for d in 0..D {
-                p.acc[d][i] += a[d];
-            }
+    a
+}
+
+/// Adds the external gravity ([`external_acceleration`]) to every particle's acceleration.
+pub fn add_gravity<const D: usize>(p: &mut Particles<D>, phys: &Physics<D>) {
+    if phys.gravity.is_none() && phys.binary.is_none() {
+        return;
+    }
+    for i in 0..p.len() {
+        let a = external_acceleration(phys, &p.position(i));
+        for d in 0..D {
+            p.acc[d][i] += a[d];
         }
     }
 }

@@ -878,16 +878,7 @@ fn inject_stream<const D: usize>(
     team: &mut dyn Team<D>,
 ) {
     let Some(inj) = &mut st.injector else { return };
-    let gravity = |x: &[f64; D]| {
-        let mut a = phys.gravity.map_or([0.0; D], |g| g.acceleration(x));
-        if let Some(b) = &phys.binary {
-            let a2 = b.donor_acceleration(x);
-            for d in 0..D {
-                a[d] += a2[d];
-            }
-        }
-        a
-    };
+    let gravity = |x: &[f64; D]| crate::integrate::external_acceleration(phys, x);
     let n = if team.is_root() {
         mt.inject(inj, p, st.t, &mut st.budget, gravity)
     } else {
