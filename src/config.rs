@@ -35,6 +35,9 @@ pub struct Config {
     /// Mass transfer through L1 (needs `[binary]`): `particles_per_orbit`,
     /// `mass_per_orbit` or `mdot_msun_per_year`, `cs`, `start`, `stop`.
     pub stream: Option<StreamParams>,
+    /// β cooling of the internal energy towards a sound-speed profile (needs an ideal gas
+    /// and a central mass): `beta`, `cs0`, `r0`, `q`.
+    pub cooling: Option<crate::physics::cooling::Cooling>,
     #[serde(default)]
     pub boundary: BoundarySection,
     #[serde(default)]
@@ -577,6 +580,10 @@ impl Config {
                 .map_err(|e| anyhow::anyhow!(e))?,
             (Some(_), None) => bail!("table `[stream]`: mass transfer through L1 needs [binary]"),
             _ => {}
+        }
+        if let Some(c) = &self.cooling {
+            c.validate(&self.eos, self.gravity.is_some() || self.binary.is_some())
+                .map_err(|e| anyhow::anyhow!(e))?;
         }
         if self.problem.kind == ProblemKind::Cv && self.binary.is_none() {
             bail!("table `[binary]`: missing (problem.kind = \"cv\" needs q or the stars' masses)");

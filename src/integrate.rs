@@ -45,8 +45,16 @@ pub fn rhs<const D: usize>(
     window: Window,
 ) -> SweepStats {
     let stats = evaluate(p, bx, phys, window);
-    add_gravity(p, phys);
+    add_external(p, phys);
     stats
+}
+
+/// What acts on each particle from outside the sweep: the external gravity, and cooling.
+pub fn add_external<const D: usize>(p: &mut Particles<D>, phys: &Physics<D>) {
+    add_gravity(p, phys);
+    if let (Some(c), Some(g)) = (&phys.cooling, &phys.gravity) {
+        c.add_to(p, &phys.eos, g);
+    }
 }
 
 /// The external gravity at `x`: the central point mass's, if there is one, and a binary

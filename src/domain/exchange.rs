@@ -734,6 +734,7 @@ mod tests {
             },
             gravity: None,
             binary: None,
+            cooling: None,
         }
     }
 

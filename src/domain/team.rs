@@ -16,7 +16,7 @@ use super::decomposition::{Decomposition, coords};
 use super::exchange::{self, ExchangeStats};
 use crate::boundary::SimBox;
 use crate::config::Config;
-use crate::integrate::add_gravity;
+use crate::integrate::add_external;
 use crate::io::log::RunLog;
 use crate::particles::Particles;
 use crate::simulation::{self, Ended, RunOptions, Team};
@@ -143,7 +143,7 @@ impl<const D: usize> Team<D> for Distributed<'_> {
             .expect("distribute() before the first step");
         let s = exchange::evaluate(self.comm, &decomp, p, bx, phys, window);
         self.decomp = Some(decomp);
-        add_gravity(p, phys);
+        add_external(p, phys);
         self.evaluations += 1;
         let t = &mut self.totals;
         t.copies_sent += s.copies_sent;

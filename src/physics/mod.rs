@@ -4,6 +4,7 @@
 
 pub mod artificial_viscosity;
 pub mod binary;
+pub mod cooling;
 pub mod eos;
 pub mod gravity;
 pub mod hydro;

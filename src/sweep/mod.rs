@@ -42,6 +42,8 @@ pub struct Physics<const D: usize> {
     pub gravity: Option<PointMass>,
     /// A binary: the donor's gravity, and the turning frame the integrator steps in.
     pub binary: Option<Binary>,
+    /// β cooling of the internal energy (applied outside the sweep, with the gravity).
+    pub cooling: Option<crate::physics::cooling::Cooling>,
 }
 
 impl<const D: usize> Physics<D> {
@@ -54,6 +56,7 @@ impl<const D: usize> Physics<D> {
             viscosity: cfg.viscosity,
             gravity: cfg.central_mass(),
             binary: cfg.binary.as_ref().map(Binary::new),
+            cooling: cfg.cooling,
         }
     }
 
@@ -66,6 +69,7 @@ impl<const D: usize> Physics<D> {
             viscosity: ViscosityModel::default(),
             gravity: None,
             binary: None,
+            cooling: None,
         }
     }
 }
