@@ -83,6 +83,15 @@ fn blast_3d_after_one_step_is_the_same_on_2_3_and_4_ranks() {
     one_step::<3>("sedov.toml", &["particles.n=16"]);
 }
 
+/// A finished run on `ranks` in-process ranks, into `dir`/<ranks>.
+fn finished_on<const D: usize>(cfg: &Config, ranks: usize, dir: &Path) -> Summary {
+    finished(run_on::<D>(
+        cfg,
+        ranks,
+        &RunOptions::quiet(dir.join(ranks.to_string())),
+    ))
+}
+
 fn finished(e: Ended) -> Summary {
     match e {
         Ended::Finished(s) => *s,
@@ -122,16 +131,8 @@ fn assert_same_run(a: &Summary, b: &Summary, keys: &[&str]) {
 fn sod_tube_to_the_end_on_3_ranks_has_the_same_totals_and_errors() {
     let cfg = config("sod.toml", &[]);
     let dir = tempfile::tempdir().unwrap();
-    let one = finished(run_on::<1>(
-        &cfg,
-        1,
-        &RunOptions::quiet(dir.path().join("1")),
-    ));
-    let three = finished(run_on::<1>(
-        &cfg,
-        3,
-        &RunOptions::quiet(dir.path().join("3")),
-    ));
+    let one = finished_on::<1>(&cfg, 1, dir.path());
+    let three = finished_on::<1>(&cfg, 3, dir.path());
     assert!(one.steps >= 100, "{} steps", one.steps);
     assert_same_run(&one, &three, &["l1_density", "l1_velocity", "l1_pressure"]);
     let par = three.parallel.expect("parallel record");
@@ -143,16 +144,8 @@ fn sod_tube_to_the_end_on_3_ranks_has_the_same_totals_and_errors() {
 fn blast_3d_for_100_steps_on_4_ranks_has_the_same_totals_and_errors() {
     let cfg = config("sedov.toml", &["particles.n=16", "time.courant=0.08"]);
     let dir = tempfile::tempdir().unwrap();
-    let one = finished(run_on::<3>(
-        &cfg,
-        1,
-        &RunOptions::quiet(dir.path().join("1")),
-    ));
-    let four = finished(run_on::<3>(
-        &cfg,
-        4,
-        &RunOptions::quiet(dir.path().join("4")),
-    ));
+    let one = finished_on::<3>(&cfg, 1, dir.path());
+    let four = finished_on::<3>(&cfg, 4, dir.path());
     assert!(one.steps >= 100, "{} steps", one.steps);
     let keys: Vec<&str> = one.errors.keys().map(String::as_str).collect();
     assert_same_run(&one, &four, &keys);
@@ -162,16 +155,8 @@ fn blast_3d_for_100_steps_on_4_ranks_has_the_same_totals_and_errors() {
 fn ring_with_accretion_on_3_ranks_keeps_the_ledger_and_the_totals() {
     let cfg = config("ring.toml", &["particles.n=20", "time.end=6.0"]);
     let dir = tempfile::tempdir().unwrap();
-    let one = finished(run_on::<2>(
-        &cfg,
-        1,
-        &RunOptions::quiet(dir.path().join("1")),
-    ));
-    let three = finished(run_on::<2>(
-        &cfg,
-        3,
-        &RunOptions::quiet(dir.path().join("3")),
-    ));
+    let one = finished_on::<2>(&cfg, 1, dir.path());
+    let three = finished_on::<2>(&cfg, 3, dir.path());
     assert!(one.steps >= 100, "{} steps", one.steps);
     assert_same_run(&one, &three, &[]);
     assert_eq!(
@@ -301,16 +286,8 @@ fn l1_stream_with_injection_is_the_same_on_1_2_and_3_ranks() {
 fn l1_stream_on_3_ranks_books_the_same_mass_budget() {
     let cfg = config("cv2d.toml", &STREAM);
     let dir = tempfile::tempdir().unwrap();
-    let one = finished(run_on::<2>(
-        &cfg,
-        1,
-        &RunOptions::quiet(dir.path().join("1")),
-    ));
-    let three = finished(run_on::<2>(
-        &cfg,
-        3,
-        &RunOptions::quiet(dir.path().join("3")),
-    ));
+    let one = finished_on::<2>(&cfg, 1, dir.path());
+    let three = finished_on::<2>(&cfg, 3, dir.path());
     assert!(one.steps >= 200, "{} steps", one.steps);
     assert_same_run(&one, &three, &[]);
     let (a, b) = (
