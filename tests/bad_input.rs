@@ -305,6 +305,13 @@ fn bad_binaries_and_streams_are_named() {
         &["stream.particles_per_orbit=1e300"],
         &["stream.particles_per_orbit", "1e300"],
     );
+    // A cv problem's gas all comes through L1: a stream starting later has nothing to run.
+    assert_check_and_run_fail(
+        d.path(),
+        &stream,
+        &["stream.start=1.0"],
+        &["stream.start", "t = 0"],
+    );
     // A binary in a 1D problem.
     assert_check_and_run_fail(
         d.path(),
