@@ -19,13 +19,25 @@ fn is_png(path: &Path) -> bool {
 /// P_orb = 2π with a 5% semi-amplitude, plus white noise; an initial transient (a rising
 /// disk) in the first 3 orbits that `--skip-orbits 3` leaves out.
 fn synthetic_csv() -> String {
-    let mut rng = Rng::new(42);
-    let mut csv = String::from("t,orbit,l_total,l_disk,l_stream,l_spot\n");
-    let mut t = 0.0f64;
-    while t < 40.0 * TAU {
+    light_curve_csv(42, 40.0 * TAU, |t, rng| {
         let rise = 1.0 - (-t / 3.0).exp();
         let disk = 2.0 * rise * (1.0 + 0.05 * (t + 1.0).cos()) + 0.05 * rng.normal();
-        let (stream, spot) = (0.1, 0.3 + 0.02 * rng.normal());
+        (disk, 0.1, 0.3 + 0.02 * rng.normal())
+    })
+}
+
+/// `lightcurve.csv` text over `span` at uneven steps of 0.02–0.1, each row's (disk, stream,
+/// spot) luminosities from `row(t, rng)`.
+fn light_curve_csv(
+    seed: u64,
+    span: f64,
+    mut row: impl FnMut(f64, &mut Rng) -> (f64, f64, f64),
+) -> String {
+    let mut rng = Rng::new(seed);
+    let mut csv = String::from("t,orbit,l_total,l_disk,l_stream,l_spot\n");
+    let mut t = 0.0f64;
+    while t < span {
+        let (disk, stream, spot) = row(t, &mut rng);
         let total = disk + stream + spot;
         let _ = writeln!(
             csv,
@@ -81,23 +93,12 @@ fn a_light_curve_gives_its_period_pictures_and_json() {
 /// 10 orbits of a disk that doubles linearly, modulated at 1.05 P_orb with a 3% semi-amplitude
 /// of its light, plus white noise; no transient.
 fn growing_csv() -> String {
-    let mut rng = Rng::new(43);
-    let mut csv = String::from("t,orbit,l_total,l_disk,l_stream,l_spot\n");
     let span = 10.0 * TAU;
-    let mut t = 0.0f64;
-    while t < span {
+    light_curve_csv(43, span, |t, rng| {
         let disk =
             1e-13 * (1.0 + t / span) * (1.0 + 0.03 * (t / 1.05).cos()) + 1e-15 * rng.normal();
-        let (stream, spot) = (0.0, 1e-14);
-        let total = disk + stream + spot;
-        let _ = writeln!(
-            csv,
-            "{t:e},{:e},{total:e},{disk:e},{stream:e},{spot:e}",
-            t / TAU
-        );
-        t += 0.02 + 0.08 * rng.uniform();
-    }
-    csv
+        (disk, 0.0, 1e-14)
+    })
 }
 
 #[test]

@@ -48,7 +48,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
-use crate::analysis::{roche, run_config};
+use crate::analysis::{roche, run_config, weighted_quantile};
 use crate::config::ProblemKind;
 use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot;
@@ -471,13 +471,10 @@ pub fn azimuth_deg(x: f64, y: f64) -> f64 {
 /// `v`: its eccentricity vector (pointing to periastron) and its periastron distance.
 /// `Binary::eccentricity` is this vector's length.
 pub fn osculating_orbit(b: &Binary, x: [f64; 3], v: [f64; 3]) -> ([f64; 3], f64) {
+    let e = b.eccentricity_vector(&x, &v);
     // The velocity relative to the accretor in the inertial frame: v + Ω × x.
     let u = [v[0] - b.omega * x[1], v[1] + b.omega * x[0], v[2]];
     let gm = 1.0 - b.mu;
-    let r = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
-    let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-    let xu = x[0] * u[0] + x[1] * u[1] + x[2] * u[2];
-    let e: [f64; 3] = std::array::from_fn(|d| ((u2 - gm / r) * x[d] - xu * u[d]) / gm);
     let l = [
         x[1] * u[2] - x[2] * u[1],
         x[2] * u[0] - x[0] * u[2],
@@ -503,24 +500,6 @@ pub fn mass_radius(s: &Snapshot, fraction: f64, pick: impl Fn(usize) -> bool) ->
         .map(|i| (cylindrical_radius(s, i), s.mass[i]))
         .collect();
     weighted_quantile(rm, fraction)
-}
-
-/// The `fraction` quantile of values weighted by masses, (value, mass) pairs: the value at
-/// which the mass sorted by value reaches `fraction` of the total; None without mass.
-fn weighted_quantile(mut vm: Vec<(f64, f64)>, fraction: f64) -> Option<f64> {
-    vm.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let total: f64 = vm.iter().map(|x| x.1).sum();
-    if !(total > 0.0) {
-        return None;
-    }
-    let mut acc = 0.0;
-    for &(v, m) in &vm {
-        acc += m;
-        if acc >= fraction * total {
-            return Some(v);
-        }
-    }
-    vm.last().map(|x| x.0)
 }
 
 /// The mass-weighted median of azimuths (degrees): offsets from the weighted circular mean

@@ -36,6 +36,24 @@ pub fn run_config(run: &Path, kind: ProblemKind, what: &str) -> Result<Config> {
     Ok(cfg)
 }
 
+/// The `fraction` quantile of values weighted by masses, (value, mass) pairs: the value at
+/// which the mass sorted by value reaches `fraction` of the total; None without mass.
+pub fn weighted_quantile(mut vm: Vec<(f64, f64)>, fraction: f64) -> Option<f64> {
+    vm.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = vm.iter().map(|x| x.1).sum();
+    if !(total > 0.0) {
+        return None;
+    }
+    let mut acc = 0.0;
+    for &(v, m) in &vm {
+        acc += m;
+        if acc >= fraction * total {
+            return Some(v);
+        }
+    }
+    vm.last().map(|x| x.0)
+}
+
 /// Volume-weighted L1 norm ∫|e| dV / ∫dV with particle volumes m/ρ.
 pub fn l1_norm<const D: usize>(p: &Particles<D>, err: impl Fn(usize) -> f64) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);

@@ -315,6 +315,16 @@ impl Binary {
     /// with corotating velocity `v` (its velocity relative to the accretor in the inertial
     /// frame is v + Ω × x).
     pub fn eccentricity<const D: usize>(&self, x: &[f64; D], v: &[f64; D]) -> f64 {
+        self.eccentricity_vector(x, v)
+            .iter()
+            .map(|c| c * c)
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// The eccentricity vector of that orbit (pointing to periastron):
+    /// e = ((u² − GM1/r) x − (x·u) u) / GM1, u = v + Ω × x.
+    pub fn eccentricity_vector<const D: usize>(&self, x: &[f64; D], v: &[f64; D]) -> [f64; D] {
         let mut u = *v;
         u[0] -= self.omega * x[1];
         u[1] += self.omega * x[0];
@@ -322,11 +332,7 @@ impl Binary {
         let r = x.iter().map(|c| c * c).sum::<f64>().sqrt();
         let u2: f64 = u.iter().map(|c| c * c).sum();
         let xu: f64 = (0..D).map(|d| x[d] * u[d]).sum();
-        let e2: f64 = (0..D)
-            .map(|d| ((u2 - gm / r) * x[d] - xu * u[d]) / gm)
-            .map(|c| c * c)
-            .sum();
-        e2.sqrt()
+        std::array::from_fn(|d| ((u2 - gm / r) * x[d] - xu * u[d]) / gm)
     }
 
     /// The region of a particle given the disk's radius `r_disk` and the kernel support.

@@ -91,20 +91,11 @@ pub fn mass_radius<const D: usize>(
     fraction: f64,
     pick: impl Fn(usize) -> bool,
 ) -> f64 {
-    let mut rm: Vec<(f64, f64)> = (0..p.len())
+    let rm: Vec<(f64, f64)> = (0..p.len())
         .filter(|&i| pick(i))
         .map(|i| (p.pos[0][i].hypot(p.pos[1][i]), p.mass[i]))
         .collect();
-    rm.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let total: f64 = rm.iter().map(|x| x.1).sum();
-    let mut acc = 0.0;
-    for (r, m) in rm {
-        acc += m;
-        if acc >= fraction * total {
-            return r;
-        }
-    }
-    0.0
+    crate::analysis::weighted_quantile(rm, fraction).unwrap_or(0.0)
 }
 
 /// The stream's first pass, measured on the particles in order of release (ids): from L1
