@@ -199,12 +199,6 @@ impl L1Stream {
         n
     }
 
-    /// Time until the next release after `t` (for the step limiter): ∞ when none is left.
-    pub fn next_release_after(&self, st: &InjectorState) -> f64 {
-        let t = self.release_time(st.released);
-        if t < self.stop { t } else { f64::INFINITY }
-    }
-
     /// Inserts every particle due by time `t` into `p` (with `u` its internal energy),
     /// each moved on from L1 by the time since its release, and returns how many.
     pub fn inject<const D: usize>(
@@ -280,7 +274,8 @@ mod tests {
         assert_eq!(ids.len(), 200);
         assert_eq!(ids[0], 1000);
         assert!((p.mass.iter().sum::<f64>() - 2.0).abs() < 1e-12);
-        assert_eq!(s.next_release_after(&st), f64::INFINITY);
+        // None is left after the stop, however long the run goes on.
+        assert_eq!(s.inject(&mut st, &mut p, 1e6, 0.0), 0);
     }
 
     #[test]
