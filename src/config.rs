@@ -38,6 +38,9 @@ pub struct Config {
     /// β cooling of the internal energy towards a sound-speed profile (needs an ideal gas
     /// and a central mass): `beta`, `cs0`, `r0`, `q`.
     pub cooling: Option<crate::physics::cooling::Cooling>,
+    /// A disk already in place about a cv problem's accretor: `r_in`, `r_out`, `spacing`
+    /// (`problems::cv_disk`).
+    pub initial_disk: Option<crate::problems::cv_disk::InitialDisk>,
     #[serde(default)]
     pub boundary: BoundarySection,
     #[serde(default)]
@@ -587,6 +590,26 @@ impl Config {
         }
         if self.problem.kind == ProblemKind::Cv && self.binary.is_none() {
             bail!("table `[binary]`: missing (problem.kind = \"cv\" needs q or the stars' masses)");
+        }
+        if let Some(disk) = &self.initial_disk {
+            let (Some(b), Some(h), ProblemKind::Cv) =
+                (&self.binary, self.particles.h, self.problem.kind)
+            else {
+                bail!(
+                    "table `[initial_disk]`: only a cv problem (with [binary] and particles.h) starts with a disk"
+                );
+            };
+            let cs_max = match self.eos {
+                Eos::Isothermal { cs } => cs,
+                Eos::LocallyIsothermal { cs0, r0, q } => {
+                    cs0 * (disk.r_in.max(1e-12) / r0)
+                        .powf(-q)
+                        .max((disk.r_out / r0).powf(-q))
+                }
+                _ => self.stream.map_or(0.0, |s| s.cs),
+            };
+            disk.validate(b.mass_ratio(), b.accretor_radius, h, d, cs_max)
+                .map_err(|e| anyhow::anyhow!(e))?;
         }
         self.viscosity
             .validate(self.gravity.is_some() || self.binary.is_some())

@@ -176,6 +176,18 @@ enum AnalyseCommand {
         #[arg(long)]
         no_detrend: bool,
     },
+    /// SU UMa superhumps: the disk's eccentricity (growth, saturation), its precession, the
+    /// superhump period and excess ε in the light curve beside the dynamical and observed ε(q)
+    /// (superhump.json, superhump_*.png in each run folder; with several runs and --out, the
+    /// series' table and ε(q) plot).
+    Superhump {
+        /// The runs' output folders (cv runs with modes.csv and lightcurve.csv).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Where to write superhump_scan.csv and superhump_scan.png (a q series).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// A cataclysmic variable: the disk's radii and eccentricity, the bright spot's azimuth
     /// and, in 3D, the stream's overflow at each snapshot (cv_evolution.csv, cv.json).
     Cv {
@@ -402,6 +414,36 @@ fn real_main(cli: Cli) -> Result<()> {
             print!("{}", report.summary());
             for f in &report.files {
                 println!("wrote {}", f.display());
+            }
+            Ok(())
+        }
+        Command::Analyse {
+            what: AnalyseCommand::Superhump { runs, out },
+        } => {
+            use sphdisk::analysis::superhump_report as sh;
+            let mut reports = Vec::new();
+            for run in &runs {
+                let report = sh::analyse_superhump(run)?;
+                print!("{}", report.summary());
+                for f in &report.files {
+                    println!("wrote {}", f.display());
+                }
+                reports.push(report);
+            }
+            if let Some(out) = out {
+                let mut with_q = Vec::new();
+                for r in &reports {
+                    let Some(p) = &r.figures.predictions else {
+                        anyhow::bail!(
+                            "{}: run.toml gives no binary q; a q series needs it",
+                            r.run.display()
+                        );
+                    };
+                    with_q.push((p.q, &r.figures));
+                }
+                for f in sh::write_scan(&out, &with_q)? {
+                    println!("wrote {}", f.display());
+                }
             }
             Ok(())
         }

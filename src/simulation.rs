@@ -25,7 +25,7 @@ use crate::io::summary::{
     AccretionLedger, Conservation, Flow, MassBudget, MassBudgetRecord, Summary, TotalsRecord,
     peak_rss_bytes,
 };
-use crate::io::timeseries::{LIGHTCURVE_HEADER, MONITOR_HEADER, Series};
+use crate::io::timeseries::{LIGHTCURVE_HEADER, MODES_HEADER, MONITOR_HEADER, Series};
 use crate::kernel::KERNEL_NAME;
 use crate::particles::Particles;
 use crate::physics::l1_stream::InjectorState;
@@ -643,9 +643,10 @@ fn advance<const D: usize>(
                     run.st.t,
                 )?,
                 Series::open(&opts.out, "monitor.csv", MONITOR_HEADER, fresh, run.st.t)?,
+                Series::open(&opts.out, "modes.csv", MODES_HEADER, fresh, run.st.t)?,
             ]
         }
-        _ => [Series::silent(), Series::silent()],
+        _ => [Series::silent(), Series::silent(), Series::silent()],
     };
     let bar = progress_bar(opts.progress && root);
     while run.st.t < t_end * (1.0 - 1e-12) {
@@ -894,7 +895,7 @@ fn inject_stream<const D: usize>(
     }
 }
 
-/// A row of `lightcurve.csv` and `monitor.csv` (collective: sums over ranks; rank 0
+/// A row of `lightcurve.csv`, `monitor.csv` and `modes.csv` (collective: sums over ranks; rank 0
 /// writes), and the time of the next.
 fn write_series<const D: usize>(
     mt: &MassTransfer,
@@ -903,7 +904,7 @@ fn write_series<const D: usize>(
     support: f64,
     every: f64,
     team: &mut dyn Team<D>,
-    series: &mut [Series; 2],
+    series: &mut [Series; 3],
 ) -> Result<()> {
     let b = &mt.binary;
     let mut hist = problems::cv::disk_histogram(b, p);
@@ -927,6 +928,27 @@ fn write_series<const D: usize>(
         f.accreted.mass,
         f.returned.mass,
         f.escaped.mass,
+    ])?;
+    let (w_lo, w_hi) = crate::analysis::cv_report::ECCENTRICITY_WINDOW;
+    let mut sums = problems::cv::mode_sums(b, p, w_lo * r_disk, w_hi * r_disk);
+    team.sum(&mut sums);
+    let modes = problems::cv::DiskModes::from_sums(&sums);
+    let nan = f64::NAN;
+    let m = |f: fn(&problems::cv::DiskModes) -> f64| modes.as_ref().map_or(nan, f);
+    // The turning frame has turned by Ω t since t = 0: the inertial longitude adds it.
+    let inertial = m(|d| d.periastron_deg) + (b.omega * st.t).to_degrees();
+    series[2].row(&[
+        st.t,
+        orbit,
+        r_disk,
+        m(|d| d.mass),
+        m(|d| d.m1),
+        m(|d| d.m1_phase_deg),
+        m(|d| d.m2),
+        m(|d| d.m2_phase_deg),
+        m(|d| d.e),
+        m(|d| d.periastron_deg),
+        inertial.rem_euclid(360.0),
     ])?;
     st.next_series = ((st.t / every).floor() + 1.0) * every;
     Ok(())

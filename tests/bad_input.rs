@@ -312,6 +312,33 @@ fn bad_binaries_and_streams_are_named() {
         &["stream.start=1.0"],
         &["stream.start", "t = 0"],
     );
+    // An initial disk must sit inside the accretor's lobe, outside its radius, at a
+    // spacing that does not ask for billions of particles, and only in a cv problem.
+    let superhump = problem("superhump.toml");
+    assert_check_and_run_fail(
+        d.path(),
+        &superhump,
+        &["initial_disk.r_out=0.9"],
+        &["initial_disk.r_out", "L1", "0.9"],
+    );
+    assert_check_and_run_fail(
+        d.path(),
+        &superhump,
+        &["initial_disk.r_in=0.01"],
+        &["initial_disk.r_in", "binary.accretor_radius"],
+    );
+    assert_check_and_run_fail(
+        d.path(),
+        &superhump,
+        &["particles.h=1e-6", "initial_disk.spacing=1e-6"],
+        &["initial_disk.spacing", "particles"],
+    );
+    assert_check_and_run_fail(
+        d.path(),
+        &problem("sod.toml"),
+        &["initial_disk.r_in=0.1", "initial_disk.r_out=0.3"],
+        &["[initial_disk]", "cv problem"],
+    );
     // A binary in a 1D problem.
     assert_check_and_run_fail(
         d.path(),

@@ -251,7 +251,7 @@ fn strs(v: &[String]) -> Vec<&str> {
     v.iter().map(String::as_str).collect()
 }
 
-/// The rows of a time series (`lightcurve.csv`, `monitor.csv`) of a run: header, rows.
+/// The rows of a time series (`lightcurve.csv`, `monitor.csv`, `modes.csv`) of a run: header, rows.
 fn series(run: &Path, name: &str) -> (String, Vec<String>) {
     let text = std::fs::read_to_string(run.join(name)).unwrap();
     let mut lines = text.lines().map(String::from);
@@ -293,6 +293,7 @@ fn resumed_l1_stream_is_bit_identical_with_the_same_time_series_and_budget() {
     ok(&strs(&args(&b, &["--stop-after", &k.to_string()])));
     let (_, before) = series(&b, "lightcurve.csv");
     let (_, monitor_before) = series(&b, "monitor.csv");
+    let (_, modes_before) = series(&b, "modes.csv");
     ok(&["run", "--quiet", "--resume", &s(&b)]);
     assert_same_state::<2>(&a, &b);
     let log = std::fs::read_to_string(b.join("run.log")).unwrap();
@@ -328,7 +329,7 @@ fn resumed_l1_stream_is_bit_identical_with_the_same_time_series_and_budget() {
         accreted_at_stop(&monitor_before) > 0.0,
         "accretion before the stop"
     );
-    for name in ["lightcurve.csv", "monitor.csv"] {
+    for name in ["lightcurve.csv", "monitor.csv", "modes.csv"] {
         let (ha, ra) = series(&a, name);
         let (hb, rb) = series(&b, name);
         assert_eq!(ha, hb, "{name}: header");
@@ -347,10 +348,10 @@ fn resumed_l1_stream_is_bit_identical_with_the_same_time_series_and_budget() {
             assert_eq!(x, y, "{name}: row {}", i + 1);
         }
         // Rows were written before the stop and after the resume.
-        let stopped = if name == "lightcurve.csv" {
-            &before
-        } else {
-            &monitor_before
+        let stopped = match name {
+            "lightcurve.csv" => &before,
+            "monitor.csv" => &monitor_before,
+            _ => &modes_before,
         };
         assert!(!stopped.is_empty() && stopped.len() < rb.len(), "{name}");
         assert_eq!(

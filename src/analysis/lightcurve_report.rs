@@ -136,6 +136,8 @@ pub struct LightcurveFigures {
     pub amplitude_mag: Option<f64>,
     /// The peak lies at the end of the search range: the period may lie beyond it.
     pub at_range_edge: bool,
+    /// The periods searched, in P_orb.
+    pub period_range_orbits: (f64, f64),
     /// Whether a polynomial trend was fitted with the sinusoid (not `--no-detrend`), its
     /// degree (0: a floating mean only), and its values at the first and last rows used
     /// (luminosity units; the whole polynomial is `fit.trend`).
@@ -248,6 +250,28 @@ pub fn supersede(rows: &[Row]) -> (Vec<Row>, usize) {
 /// a cubic trend in time fitted with it (see the module's documentation), else against a
 /// floating mean.
 pub fn analyse(rows: &[Row], skip_orbits: f64, detrend: bool) -> Result<LightcurveFigures> {
+    analyse_range(
+        rows,
+        skip_orbits,
+        detrend,
+        (PERIOD_MIN_ORBITS, PERIOD_MAX_ORBITS),
+    )
+}
+
+/// [`analyse`] with the periods searched limited to `range` (in P_orb; within 0.05–50).
+pub fn analyse_range(
+    rows: &[Row],
+    skip_orbits: f64,
+    detrend: bool,
+    range: (f64, f64),
+) -> Result<LightcurveFigures> {
+    if !(range.0 >= 0.05 && range.1 > range.0 && range.1 <= 50.0) {
+        bail!(
+            "period range {}..{} P_orb: must lie within 0.05..50 and be increasing",
+            range.0,
+            range.1
+        );
+    }
     if !(skip_orbits >= 0.0 && skip_orbits.is_finite()) {
         bail!("--skip-orbits {skip_orbits}: must be a number ≥ 0");
     }
@@ -274,10 +298,7 @@ pub fn analyse(rows: &[Row], skip_orbits: f64, detrend: bool) -> Result<Lightcur
     if !(span > 0.0) {
         bail!("the rows used cover no time");
     }
-    let (f_min, f_max) = (
-        1.0 / (PERIOD_MAX_ORBITS * TAU),
-        1.0 / (PERIOD_MIN_ORBITS * TAU),
-    );
+    let (f_min, f_max) = (1.0 / (range.1 * TAU), 1.0 / (range.0 * TAU));
     let degree = if detrend { TREND_DEGREE } else { 0 };
     let grid = frequency_grid(span, f_min, f_max, OVERSAMPLE)?;
     let power = lomb_scargle_grid_trend(&t, &y, &grid, degree);
@@ -307,7 +328,9 @@ pub fn analyse(rows: &[Row], skip_orbits: f64, detrend: bool) -> Result<Lightcur
     }
     if at_range_edge {
         notes.push(format!(
-            "the peak lies at the end of the search range ({PERIOD_MIN_ORBITS}..{PERIOD_MAX_ORBITS} P_orb): the true period may lie outside it"
+            "the peak lies at the end of the search range ({}..{} P_orb): the true period may lie outside it",
+            range.0,
+            range.1
         ));
     }
     if cycles < 3.0 {
@@ -350,6 +373,7 @@ pub fn analyse(rows: &[Row], skip_orbits: f64, detrend: bool) -> Result<Lightcur
         amplitude_rel_err,
         amplitude_mag,
         at_range_edge,
+        period_range_orbits: range,
         detrended: detrend,
         trend_degree: degree,
         trend_start,
@@ -381,7 +405,7 @@ impl LightcurveFigures {
 
 /// `q` and `period_days` of `run.toml`'s `[binary]`, read leniently: no file, no table or
 /// no keys give `None`s; a file that does not parse gives a note instead.
-fn binary_of(run: &Path) -> (Option<f64>, Option<f64>, Option<String>) {
+pub(crate) fn binary_of(run: &Path) -> (Option<f64>, Option<f64>, Option<String>) {
     let path = run.join("run.toml");
     let Ok(text) = std::fs::read_to_string(&path) else {
         return (None, None, None);
@@ -461,7 +485,7 @@ fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-fn lightcurve_panels(rows: &[Row], f: &LightcurveFigures) -> Vec<Panel> {
+pub(crate) fn lightcurve_panels(rows: &[Row], f: &LightcurveFigures) -> Vec<Panel> {
     let orbit = |r: &Row| r.t / TAU;
     let curve = |g: &dyn Fn(&Row) -> f64| rows.iter().map(|r| (orbit(r), g(r))).collect();
     let x_range = {
@@ -583,7 +607,7 @@ fn lightcurve_panels(rows: &[Row], f: &LightcurveFigures) -> Vec<Panel> {
     ]
 }
 
-fn periodogram_panel(f: &LightcurveFigures) -> Panel {
+pub(crate) fn periodogram_panel(f: &LightcurveFigures) -> Panel {
     let top = f
         .periodogram
         .iter()
@@ -605,7 +629,7 @@ fn periodogram_panel(f: &LightcurveFigures) -> Panel {
         },
         x_label: "period / P_orb".into(),
         y_label: "normalised power".into(),
-        x_range: (PERIOD_MIN_ORBITS, PERIOD_MAX_ORBITS),
+        x_range: f.period_range_orbits,
         y_range: (0.0, top),
         series: vec![
             Series {

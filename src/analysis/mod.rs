@@ -12,6 +12,7 @@ pub mod ring_report;
 pub mod roche;
 pub mod sedov;
 pub mod sod_report;
+pub mod superhump_report;
 pub mod viscous_disk;
 
 use std::path::Path;

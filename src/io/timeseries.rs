@@ -1,7 +1,8 @@
 //! Time series written during a run, a row at a time (FargoCPT's monitor files, Phantom's
 //! `.ev`): for a binary, `lightcurve.csv` (the luminosity L = Σ mᵢ ε̇ᵢ of the dissipated
-//! energy, split into disk, stream and bright-spot regions) and `monitor.csv` (the disk's
-//! radius and mass, and the mass budget). Rows are appended and flushed at once; a resumed
+//! energy, split into disk, stream and bright-spot regions), `monitor.csv` (the disk's
+//! radius and mass, and the mass budget) and `modes.csv` (the disk's eccentricity, m = 1
+//! and m = 2 modes and longitude of periastron). Rows are appended and flushed at once; a resumed
 //! run first drops the rows written after its checkpoint, so the files continue as if the
 //! run had never stopped.
 
@@ -64,6 +65,10 @@ impl Series {
 
 /// Header of `lightcurve.csv`.
 pub const LIGHTCURVE_HEADER: &str = "t,orbit,l_total,l_disk,l_stream,l_spot";
+/// Header of `modes.csv`: the disk's m = 1 and m = 2 modes and mean eccentricity in the
+/// window [0.5, 1.0) R90 (`problems::cv::DiskModes`), the longitude of periastron in the
+/// turning frame and in the inertial frame (whose slope is the precession rate).
+pub const MODES_HEADER: &str = "t,orbit,r_disk,window_mass,m1,m1_phase_deg,m2,m2_phase_deg,e,periastron_deg,periastron_inertial_deg";
 /// Header of `monitor.csv`.
 pub const MONITOR_HEADER: &str =
     "t,orbit,particles,mass,disk_mass,r_disk,injected,accreted,returned,escaped";

@@ -49,6 +49,11 @@ impl MassTransfer {
         })
     }
 
+    /// Internal energy of inserted gas (0 unless the gas is ideal).
+    pub fn u_inject(&self) -> f64 {
+        self.u_inject
+    }
+
     /// The injector's state at the start of a run whose particles' ids end below `next_id`.
     pub fn start_state(&self, seed: u64, next_id: u64) -> InjectorState {
         InjectorState {

@@ -3,6 +3,7 @@
 
 pub mod advection;
 pub mod cv;
+pub mod cv_disk;
 pub mod disk;
 pub mod file;
 pub mod lattice;
