@@ -5,6 +5,8 @@
    header's and the particles' own, and the SPH density field is the one stored.
 2. h5py reads a snapshot split over several files (SWIFT's multi-file convention): the
    parts' NumPart_ThisFile add up to NumPart_Total and together hold every particle once.
+3. swiftsimio (SWIFT's own reader) loads a 3D and a 2D snapshot with units: every
+   particle, the stored masses and densities, the header's time and dimension.
 
 Usage: scripts/check_snapshots.py [path/to/sphdisk]   (default target/release/sphdisk)
 """
@@ -15,6 +17,7 @@ import tempfile
 
 import h5py
 import numpy as np
+import swiftsimio
 import yt
 
 yt.set_log_level(40)
@@ -62,8 +65,9 @@ with tempfile.TemporaryDirectory() as tmp:
     for k, path in enumerate(parts):
         with h5py.File(path, "r") as f:
             h = f["Header"].attrs
-            assert int(h["NumFilesPerSnapshot"]) == 3
-            assert int(h["ThisFile"]) == k
+            # SWIFT writes numbers as 1-element arrays.
+            assert h["NumFilesPerSnapshot"].shape == (1,) and h["NumFilesPerSnapshot"][0] == 3
+            assert h["ThisFile"][0] == k
             total = int(h["NumPart_Total"][0])
             counts.append(int(h["NumPart_ThisFile"][0]))
             ids.append(f["PartType0/ParticleIDs"][:])
@@ -72,4 +76,26 @@ with tempfile.TemporaryDirectory() as tmp:
     assert sum(counts) == total == 900, (counts, total)
     assert len(np.unique(ids)) == total, "a particle is missing or repeated"
     print(f"h5py: multi-file snapshot, {len(parts)} files, {counts} = {total} particles")
+
+    # 3. swiftsimio on the 3D Sedov snapshot and a 2D one (the spreading ring).
+    run("ring.toml", tmp / "r", "particles.n=20", "ring.tau_end=0.017",
+        "output.interval=0.01")
+    for path, dim in [(snap, 3), (tmp / "r" / "snap_0001.hdf5", 2)]:
+        with h5py.File(path, "r") as f:
+            n = int(f["Header"].attrs["NumPart_Total"][0])
+            t = float(f["Header"].attrs["Time"][0])
+            m_h5 = f["PartType0/Masses"][:]
+            rho_h5 = f["PartType0/Densities"][:]
+        data = swiftsimio.load(str(path))
+        gas = data.gas
+        assert len(gas.masses) == n > 0, (len(gas.masses), n)
+        assert np.array_equal(np.asarray(gas.masses), m_h5)
+        assert np.array_equal(np.asarray(gas.densities), rho_h5)
+        # Densities carry mass / length^dimension (Σ in 2D).
+        assert gas.densities.units.dimensions == (
+            gas.masses.units.dimensions / gas.coordinates.units.dimensions**dim), (
+            gas.densities.units)
+        assert abs(float(data.metadata.time.value) - t) <= 1e-12 * max(t, 1.0)
+        print(f"swiftsimio {swiftsimio.__version__}: {dim}D, {n} particles, "
+              f"density in {gas.densities.units}, t = {t}")
 print("snapshot checks passed")

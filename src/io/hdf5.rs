@@ -167,9 +167,12 @@ fn encode_part(
     );
     header.set_attr("BoxSize", AttrValue::F64Array(box_size));
     header.set_attr("Shift", AttrValue::F64Array(snap.shift.to_vec()));
-    header.set_attr("Dimension", AttrValue::I32(snap.dimension as i32));
-    header.set_attr("Time", AttrValue::F64(snap.time));
-    header.set_attr("Step", AttrValue::U64(snap.step));
+    header.set_attr(
+        "Dimension",
+        AttrValue::I32Array(vec![snap.dimension as i32]),
+    );
+    header.set_attr("Time", AttrValue::F64Array(vec![snap.time]));
+    header.set_attr("Step", AttrValue::U64Array(vec![snap.step]));
     header.set_attr("NumPart_ThisFile", AttrValue::U64Array(this_file.to_vec()));
     header.set_attr("NumPart_Total", AttrValue::U64Array(total.to_vec()));
     header.set_attr(
@@ -177,20 +180,35 @@ fn encode_part(
         AttrValue::U64Array(vec![0; N_TYPES]),
     );
     header.set_attr("MassTable", AttrValue::F64Array(vec![0.0; N_TYPES]));
-    header.set_attr("NumFilesPerSnapshot", AttrValue::I32(num_files as i32));
-    header.set_attr("ThisFile", AttrValue::I32(file_index as i32));
+    header.set_attr(
+        "NumFilesPerSnapshot",
+        AttrValue::I32Array(vec![num_files as i32]),
+    );
+    header.set_attr("ThisFile", AttrValue::I32Array(vec![file_index as i32]));
     header.set_attr("Flag_Entropy_ICs", AttrValue::I32Array(vec![0; N_TYPES]));
-    header.set_attr("Redshift", AttrValue::F64(0.0));
-    header.set_attr("Scale-factor", AttrValue::F64(1.0));
+    header.set_attr("Redshift", AttrValue::F64Array(vec![0.0]));
+    header.set_attr("Scale-factor", AttrValue::F64Array(vec![1.0]));
     fb.add_group(header.finish());
 
     let mut units = fb.create_group("Units");
     let u = meta.units;
-    units.set_attr("Unit mass in cgs (U_M)", AttrValue::F64(u.mass_cgs));
-    units.set_attr("Unit length in cgs (U_L)", AttrValue::F64(u.length_cgs));
-    units.set_attr("Unit time in cgs (U_t)", AttrValue::F64(u.time_cgs));
-    units.set_attr("Unit current in cgs (U_I)", AttrValue::F64(1.0));
-    units.set_attr("Unit temperature in cgs (U_T)", AttrValue::F64(1.0));
+    units.set_attr(
+        "Unit mass in cgs (U_M)",
+        AttrValue::F64Array(vec![u.mass_cgs]),
+    );
+    units.set_attr(
+        "Unit length in cgs (U_L)",
+        AttrValue::F64Array(vec![u.length_cgs]),
+    );
+    units.set_attr(
+        "Unit time in cgs (U_t)",
+        AttrValue::F64Array(vec![u.time_cgs]),
+    );
+    units.set_attr("Unit current in cgs (U_I)", AttrValue::F64Array(vec![1.0]));
+    units.set_attr(
+        "Unit temperature in cgs (U_T)",
+        AttrValue::F64Array(vec![1.0]),
+    );
     fb.add_group(units.finish());
 
     let mut policy = fb.create_group("Policy");
@@ -203,14 +221,14 @@ fn encode_part(
             i32::from(!snap.point_masses.is_empty()),
         ),
     ] {
-        policy.set_attr(k, AttrValue::I32(v));
+        policy.set_attr(k, AttrValue::I32Array(vec![v]));
     }
     fb.add_group(policy.finish());
 
     let mut runtime = fb.create_group("RuntimePars");
     runtime.set_attr(
         "PeriodicBoundariesOn",
-        AttrValue::I32(i32::from(meta.periodic)),
+        AttrValue::I32Array(vec![i32::from(meta.periodic)]),
     );
     fb.add_group(runtime.finish());
 
@@ -234,8 +252,11 @@ fn encode_part(
         "Smoothing length convention",
         AttrValue::AsciiString("constant h; kernel support radius 2h (cubic spline)".into()),
     );
-    hydro.set_attr("Kernel target N_ngb", AttrValue::F64(0.0));
-    hydro.set_attr("Dimension", AttrValue::I32(snap.dimension as i32));
+    hydro.set_attr("Kernel target N_ngb", AttrValue::F64Array(vec![0.0]));
+    hydro.set_attr(
+        "Dimension",
+        AttrValue::I32Array(vec![snap.dimension as i32]),
+    );
     fb.add_group(hydro.finish());
     let subgrid = fb.create_group("SubgridScheme");
     fb.add_group(subgrid.finish());
@@ -389,23 +410,24 @@ fn add_dataset(
     set_unit_attrs(ds, e, units);
 }
 
-/// SWIFT's per-dataset unit attributes, which swiftsimio reads to attach units.
+/// SWIFT's per-dataset unit attributes, which swiftsimio reads to attach units: numbers as
+/// 1-element arrays, as SWIFT writes them (swiftsimio indexes them `[0]`).
 fn set_unit_attrs(ds: &mut hdf5_pure::DatasetBuilder, e: Exponents, units: Units) {
-    ds.set_attr("U_M exponent", AttrValue::F32(e.m as f32));
-    ds.set_attr("U_L exponent", AttrValue::F32(e.l as f32));
-    ds.set_attr("U_t exponent", AttrValue::F32(e.t as f32));
-    ds.set_attr("U_I exponent", AttrValue::F32(0.0));
-    ds.set_attr("U_T exponent", AttrValue::F32(0.0));
-    ds.set_attr("a-scale exponent", AttrValue::F32(0.0));
-    ds.set_attr("h-scale exponent", AttrValue::F32(0.0));
+    ds.set_attr("U_M exponent", AttrValue::F32Array(vec![e.m as f32]));
+    ds.set_attr("U_L exponent", AttrValue::F32Array(vec![e.l as f32]));
+    ds.set_attr("U_t exponent", AttrValue::F32Array(vec![e.t as f32]));
+    ds.set_attr("U_I exponent", AttrValue::F32Array(vec![0.0]));
+    ds.set_attr("U_T exponent", AttrValue::F32Array(vec![0.0]));
+    ds.set_attr("a-scale exponent", AttrValue::F32Array(vec![0.0]));
+    ds.set_attr("h-scale exponent", AttrValue::F32Array(vec![0.0]));
     let f = units.factor(e);
     ds.set_attr(
         "Conversion factor to CGS (not including cosmological corrections)",
-        AttrValue::F64(f),
+        AttrValue::F64Array(vec![f]),
     );
     ds.set_attr(
         "Conversion factor to physical CGS (including cosmological corrections)",
-        AttrValue::F64(f),
+        AttrValue::F64Array(vec![f]),
     );
 }
 
@@ -527,8 +549,13 @@ fn attr_f64(attrs: &HashMap<String, AttrValue>, key: &str) -> Option<f64> {
         AttrValue::I64(x) => Some(*x as f64),
         AttrValue::U32(x) => Some(f64::from(*x)),
         AttrValue::U64(x) => Some(*x as f64),
+        // SWIFT writes numbers as 1-element arrays.
         AttrValue::F64Array(v) if v.len() == 1 => Some(v[0]),
+        AttrValue::F32Array(v) if v.len() == 1 => Some(f64::from(v[0])),
         AttrValue::I32Array(v) if v.len() == 1 => Some(f64::from(v[0])),
+        AttrValue::I64Array(v) if v.len() == 1 => Some(v[0] as f64),
+        AttrValue::U32Array(v) if v.len() == 1 => Some(f64::from(v[0])),
+        AttrValue::U64Array(v) if v.len() == 1 => Some(v[0] as f64),
         _ => None,
     }
 }
@@ -789,6 +816,47 @@ mod tests {
         assert!((c / (2e33 / 4.9e21) - 1.0).abs() < 1e-12);
         let coords = f.dataset("PartType0/Coordinates").unwrap();
         assert_eq!(coords.shape().unwrap(), vec![10, 3]);
+    }
+
+    #[test]
+    fn numbers_are_one_element_arrays_as_swift_writes_them() {
+        // swiftsimio reads every number of /Header, /Units and the datasets' unit
+        // attributes as `value[0]`: a scalar attribute raises IndexError there.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("snap.hdf5");
+        write_snapshot(&path, &sample(10, 2), &meta(), 1).unwrap();
+        let f = File::open(&path).unwrap();
+        let one = |v: &AttrValue| {
+            matches!(v, AttrValue::F64Array(a) if a.len() == 1)
+                || matches!(v, AttrValue::F32Array(a) if a.len() == 1)
+                || matches!(v, AttrValue::I32Array(a) if a.len() == 1)
+                || matches!(v, AttrValue::U64Array(a) if a.len() == 1)
+        };
+        let h = f.group("Header").unwrap().attrs().unwrap();
+        for k in [
+            "Dimension",
+            "Time",
+            "NumFilesPerSnapshot",
+            "ThisFile",
+            "Scale-factor",
+        ] {
+            assert!(one(&h[k]), "Header/{k}: {:?}", h[k]);
+        }
+        let units = f.group("Units").unwrap().attrs().unwrap();
+        assert_eq!(units.len(), 5);
+        for (k, v) in &units {
+            assert!(one(v), "Units/{k}: {v:?}");
+        }
+        let ds = f.dataset("PartType0/Densities").unwrap().attrs().unwrap();
+        for k in [
+            "U_M exponent",
+            "U_L exponent",
+            "U_t exponent",
+            "a-scale exponent",
+        ] {
+            assert!(one(&ds[k]), "Densities {k}: {:?}", ds[k]);
+        }
+        assert_eq!(ds["U_L exponent"], AttrValue::F32Array(vec![-2.0]));
     }
 
     #[test]
