@@ -4,25 +4,31 @@
 //!
 //! - **Eccentricity.** e(t) is the m = 1 amplitude of the disk mass in the window
 //!   [0.5, 1.0) R90 (`analysis::cv_report::ECCENTRICITY_WINDOW`: for a ring on a Kepler
-//!   ellipse it is the ellipse's e), smoothed over one orbit ([`SMOOTH_ORBITS`]). Its
-//!   saturated value is the median over the last quarter of the run; its floor the least
-//!   smoothed value before it first reaches half the saturated one (the onset). The disk
-//!   counts as eccentric when the saturated value is at least [`ECCENTRIC_MIN`] and three
-//!   times the floor. The growth rate γ is that of a logistic, de/dt = γ e (1 − e/e_sat) —
-//!   exponential growth at γ while e ≪ e_sat, saturating at e_sat — whose
-//!   ln(e/(e_sat − e)) is exactly γ t + const: the slope of that against time between the
-//!   last time e was below max(e_sat/8, 1.5 floor) and the first time it reached 0.7 e_sat
-//!   (a plain slope of ln e there would read 0.6 γ, bent by the saturation).
+//!   ellipse it is the ellipse's e), smoothed over one orbit ([`SMOOTH_ORBITS`]). Its peak
+//!   is its largest value after the first [`START_ORBITS`]; the onset the first time it
+//!   reaches half the peak; its floor the least value before the onset. The disk counts as
+//!   eccentric when the peak is at least [`ECCENTRIC_MIN`] and three times the floor, and e
+//!   stays above half the peak for [`MIN_ACTIVE_ORBITS`] or more. The active stretch runs
+//!   from the first time e reaches 0.8 of the peak to the last time it is above half of it:
+//!   a disk fed steadily stays eccentric to the end of the run, one that shrinks inside
+//!   r_3:1 (the stream too weak to hold it there, or the tides of a heavier donor) loses
+//!   the mode again, and its superhump fades as at the end of a superoutburst. The
+//!   saturated e is the median over the active stretch. The growth rate γ is that of a
+//!   logistic, de/dt = γ e (1 − e/e_peak) — exponential growth at γ while e ≪ e_peak,
+//!   saturating at e_peak — whose ln(e/(e_peak − e)) is exactly γ t + const: the slope of
+//!   that against time between the last time e was below max(e_peak/8, 1.5 floor) and the
+//!   first time it reached 0.7 e_peak (a plain slope of ln e there would read 0.6 γ, bent by
+//!   the saturation).
 //! - **Precession.** The longitude of periastron in the inertial frame, ϖ = (the m = 1
-//!   phase, which points to apoastron) + 180° + Ω t, unwrapped over the saturated stretch
-//!   (from the first time e reaches 0.8 e_sat); a straight-line fit gives ω_p in units of
-//!   Ω_orb. Its error is the scatter of the slopes of four equal blocks over √4 — the
-//!   phase noise is correlated from row to row, so the formal least-squares error would be
+//!   phase, which points to apoastron) + 180° + Ω t, unwrapped over the active stretch; a
+//!   straight-line fit gives ω_p in units of Ω_orb. Its error is the scatter of the slopes
+//!   of four equal blocks over √4 — the phase noise is correlated from row to row, so the
+//!   formal least-squares error would be
 //!   optimistic. The beat of the precession with the orbit has the period
 //!   P_beat = P_orb/(1 − ω_p), ε_beat = ω_p/(1 − ω_p). The osculating eccentricity vector's
 //!   longitude (`modes.csv` `periastron_inertial_deg`) gives a second rate, reported beside
 //!   it.
-//! - **Light curve.** The dissipation light curve of the same saturated stretch, its
+//! - **Light curve.** The dissipation light curve of the same active stretch, its
 //!   periodogram searched between [`PERIOD_RANGE`] P_orb with a floating cubic trend
 //!   (`analysis::lightcurve_report`): the superhump period P_sh with its error,
 //!   ε = (P_sh − P_orb)/P_orb, the modulation's semi-amplitude relative to the trend and its
@@ -60,6 +66,13 @@ pub const SMOOTH_ORBITS: f64 = 1.0;
 /// alone holds the amplitude near 0.01 (measured in the first orbits of
 /// `problems/superhump.toml`).
 pub const ECCENTRIC_MIN: f64 = 0.03;
+/// Orbits at the start of a run left out of the search for the peak: the set-up relaxes
+/// (the stream's first impact, the edges of an initial disk) and lifts the m = 1 amplitude
+/// for about an orbit.
+pub const START_ORBITS: f64 = 2.0;
+/// The shortest stretch (orbits, onset to the last time above half the peak) called an
+/// eccentric disk: enough superhump cycles to measure.
+pub const MIN_ACTIVE_ORBITS: f64 = 5.0;
 /// Periods searched in the light curve, in P_orb: superhumps lie within a few tens of per
 /// cent of the orbit (observed ε from −(negative superhumps) to +10%).
 pub const PERIOD_RANGE: (f64, f64) = (0.8, 1.5);
@@ -141,29 +154,38 @@ pub fn parse_modes(text: &str) -> Result<Vec<ModesRow>> {
     Ok(rows)
 }
 
-/// The eccentricity's growth and saturation.
+/// The eccentricity's growth, saturation and (where the disk shrinks) decay.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Growth {
     /// The m = 1 amplitude (smoothed) before the onset, at its least.
     pub e_floor: f64,
-    /// Its median over the last quarter of the run.
+    /// Its largest value after the first [`START_ORBITS`] orbits, and when.
+    pub e_peak: f64,
+    pub peak_orbit: f64,
+    /// Its median over the active stretch ([`Growth::active_orbits`]).
     pub e_saturated: f64,
     /// The mean osculating eccentricity over the same stretch (a second measure).
     pub e_osculating_saturated: f64,
     /// The m = 2 amplitude over the same stretch (the tidal response).
     pub m2_saturated: f64,
+    /// The m = 1 amplitude's median over the last quarter of the run.
+    pub e_end: f64,
     pub eccentric: bool,
-    /// First time (orbits) e reached half its saturated value.
+    /// The mode had faded by the end: e_end below half the peak.
+    pub faded: bool,
+    /// First time (orbits) e reached half its peak.
     pub onset_orbit: Option<f64>,
     /// The disk's radius R90 at the onset.
     pub r_disk_at_onset: Option<f64>,
-    /// Slope of ln e in the exponential stretch, per orbit, and its e-folding time.
+    /// The logistic growth rate per orbit, and its e-folding time.
     pub growth_rate_per_orbit: Option<f64>,
     pub e_folding_orbits: Option<f64>,
     /// The stretch fitted, in orbits.
     pub growth_fit_orbits: Option<(f64, f64)>,
-    /// From here on (orbits) the mode is taken as saturated (e ≥ 0.8 e_sat).
-    pub saturated_from_orbit: f64,
+    /// The stretch (orbits) over which the precession and the superhump are measured: from
+    /// the first time e reached 0.8 of its peak to the last time it was above half of it
+    /// (the second half of the run if the disk did not turn eccentric).
+    pub active_orbits: (f64, f64),
 }
 
 /// The precession of the eccentric disk.
@@ -293,47 +315,68 @@ fn unwrap_deg(a: &[f64]) -> Vec<f64> {
 pub fn growth(t: &[f64], m1: &[f64], osc: &[f64], m2: &[f64], r_disk: &[f64]) -> Growth {
     let es = running_mean(t, m1, 0.5 * SMOOTH_ORBITS);
     let (t0, t1) = (t[0], t[t.len() - 1]);
-    let last_quarter = |y: &[f64]| {
+    let median_over = |y: &[f64], lo: f64, hi: f64| {
         median(
             t.iter()
                 .zip(y)
-                .filter(|(tt, _)| **tt >= t1 - 0.25 * (t1 - t0))
+                .filter(|(tt, _)| (lo..=hi).contains(*tt))
                 .map(|(_, v)| *v)
                 .collect(),
         )
     };
-    let e_sat = last_quarter(&es);
-    let onset = es.iter().position(|e| *e >= 0.5 * e_sat);
-    let before = onset.unwrap_or(es.len());
-    let e_floor = es[..before.max(1)]
+    let e_end = median_over(&es, t1 - 0.25 * (t1 - t0), t1);
+    let mut g = Growth {
+        e_end,
+        active_orbits: (t0 + 0.5 * (t1 - t0), t1),
+        ..Growth::default()
+    };
+    let from = t.partition_point(|x| *x < t0 + START_ORBITS);
+    let Some(peak) = (from..es.len())
+        .filter(|&k| es[k].is_finite())
+        .max_by(|&a, &b| es[a].total_cmp(&es[b]))
+    else {
+        return g;
+    };
+    let e_peak = es[peak];
+    (g.e_peak, g.peak_orbit) = (e_peak, t[peak]);
+    let onset = es[..=peak]
+        .iter()
+        .position(|e| *e >= 0.5 * e_peak)
+        .unwrap_or(peak);
+    g.e_floor = es[..onset.max(1)]
         .iter()
         .copied()
         .filter(|x| x.is_finite())
         .fold(f64::INFINITY, f64::min);
-    let mut g = Growth {
-        e_floor,
-        e_saturated: e_sat,
-        e_osculating_saturated: last_quarter(&running_mean(t, osc, 0.5 * SMOOTH_ORBITS)),
-        m2_saturated: last_quarter(&running_mean(t, m2, 0.5 * SMOOTH_ORBITS)),
-        eccentric: e_sat >= ECCENTRIC_MIN && e_sat >= 3.0 * e_floor,
-        saturated_from_orbit: t0 + 0.5 * (t1 - t0),
-        ..Growth::default()
-    };
-    let Some(on) = onset.filter(|_| g.eccentric) else {
+    let start = es[..=peak]
+        .iter()
+        .position(|e| *e >= 0.8 * e_peak)
+        .unwrap_or(peak);
+    let end = es.iter().rposition(|e| *e >= 0.5 * e_peak).unwrap_or(peak);
+    g.eccentric = e_peak >= ECCENTRIC_MIN
+        && e_peak >= 3.0 * g.e_floor
+        && t[end] - t[onset] >= MIN_ACTIVE_ORBITS;
+    g.faded = e_end < 0.5 * e_peak;
+    let stretch = |y: &[f64]| median_over(y, t[start], t[end]);
+    if !g.eccentric {
         return g;
-    };
-    g.onset_orbit = Some(t[on]);
-    g.r_disk_at_onset = r_disk[on].is_finite().then_some(r_disk[on]);
-    if let Some(s) = es.iter().position(|e| *e >= 0.8 * e_sat) {
-        g.saturated_from_orbit = t[s];
     }
-    let low = (e_sat / 8.0).max(1.5 * e_floor);
-    let a = es[..on].iter().rposition(|e| *e <= low).unwrap_or(0);
-    let b = es.iter().position(|e| *e >= 0.7 * e_sat).unwrap_or(on);
-    // The logistic de/dt = γ e (1 − e/e_sat) has ln(e/(e_sat − e)) = γ t + const exactly.
+    g.active_orbits = (t[start], t[end]);
+    g.e_saturated = stretch(&es);
+    g.e_osculating_saturated = stretch(&running_mean(t, osc, 0.5 * SMOOTH_ORBITS));
+    g.m2_saturated = stretch(&running_mean(t, m2, 0.5 * SMOOTH_ORBITS));
+    g.onset_orbit = Some(t[onset]);
+    g.r_disk_at_onset = r_disk[onset].is_finite().then_some(r_disk[onset]);
+    let low = (e_peak / 8.0).max(1.5 * g.e_floor);
+    let a = es[..onset].iter().rposition(|e| *e <= low).unwrap_or(0);
+    let b = es[..=peak]
+        .iter()
+        .position(|e| *e >= 0.7 * e_peak)
+        .unwrap_or(onset);
+    // The logistic de/dt = γ e (1 − e/e_peak) has ln(e/(e_peak − e)) = γ t + const exactly.
     let (x, y): (Vec<f64>, Vec<f64>) = (a..=b)
-        .filter(|&k| es[k] > 0.0 && es[k] < e_sat)
-        .map(|k| (t[k], (es[k] / (e_sat - es[k])).ln()))
+        .filter(|&k| es[k] > 0.0 && es[k] < e_peak)
+        .map(|k| (t[k], (es[k] / (e_peak - es[k])).ln()))
         .unzip();
     if x.len() >= 5
         && let Some((_, rate)) = line_fit(&x, &y)
@@ -346,11 +389,11 @@ pub fn growth(t: &[f64], m1: &[f64], osc: &[f64], m2: &[f64], r_disk: &[f64]) ->
     g
 }
 
-/// The precession over the rows with t ≥ `from` (orbits; module doc).
-pub fn precession(rows: &[ModesRow], from: f64) -> Option<Precession> {
+/// The precession over the rows with `from` ≤ t ≤ `to` (orbits; module doc).
+pub fn precession(rows: &[ModesRow], from: f64, to: f64) -> Option<Precession> {
     let used: Vec<&ModesRow> = rows
         .iter()
-        .filter(|r| r.t / TAU >= from && r.m1_phase_deg.is_finite())
+        .filter(|r| (from..=to).contains(&(r.t / TAU)) && r.m1_phase_deg.is_finite())
         .collect();
     if used.len() < 20 {
         return None;
@@ -421,20 +464,22 @@ pub fn analyse(
     let mut notes = Vec::new();
     if !g.eccentric {
         notes.push(format!(
-            "the disk did not turn eccentric: m = 1 amplitude {:.4} at the end (floor {:.4}); the light curve is analysed over the second half",
-            g.e_saturated, g.e_floor
+            "the disk did not turn eccentric: the m = 1 amplitude peaked at {:.4} (orbit {:.1}; floor {:.4}, {:.4} at the end); the light curve is analysed over the second half",
+            g.e_peak, g.peak_orbit, g.e_floor, g.e_end
         ));
     }
-    let from = g.saturated_from_orbit;
+    let (from, to) = g.active_orbits;
     let prec = if g.eccentric {
-        precession(modes, from)
+        precession(modes, from, to)
     } else {
         None
     };
+    let light: Vec<lightcurve_report::Row> =
+        light.iter().filter(|r| r.t / TAU <= to).copied().collect();
     let lc = match light.first() {
         Some(first) => {
             let skip = (from - first.t / TAU).max(0.0);
-            match lightcurve_report::analyse_range(light, skip, true, PERIOD_RANGE) {
+            match lightcurve_report::analyse_range(&light, skip, true, PERIOD_RANGE) {
                 Ok(f) => Some(f),
                 Err(e) => {
                     notes.push(format!("light curve: {e:#}"));
@@ -447,6 +492,12 @@ pub fn analyse(
             None
         }
     };
+    if g.eccentric && g.faded {
+        notes.push(format!(
+            "the eccentricity peaked at {:.3} (orbit {:.1}) and faded to {:.3} by the end: precession and superhump are measured over orbits {from:.1}–{to:.1}",
+            g.e_peak, g.peak_orbit, g.e_end
+        ));
+    }
     let predictions = q.map(|q| Predictions {
         q,
         r_31: roche::r_31(q),
@@ -566,10 +617,13 @@ impl SuperhumpReport {
             f.orbits.1
         );
         s += &format!(
-            "  eccentricity (m = 1): floor {:.4}, saturated {:.4} (osculating {:.4}), m = 2 {:.4}: {}\n",
+            "  eccentricity (m = 1): floor {:.4}, peak {:.4} at orbit {:.1}, saturated {:.4} (osculating {:.4}), at the end {:.4}, m = 2 {:.4}: {}\n",
             g.e_floor,
+            g.e_peak,
+            g.peak_orbit,
             g.e_saturated,
             g.e_osculating_saturated,
+            g.e_end,
             g.m2_saturated,
             if g.eccentric {
                 "eccentric"
@@ -689,7 +743,7 @@ fn eccentricity_panel(modes: &[ModesRow], f: &SuperhumpFigures) -> Panel {
     if let (Some(rate), Some((fa, fb)), Some(on)) =
         (g.growth_rate_per_orbit, g.growth_fit_orbits, g.onset_orbit)
     {
-        let es = g.e_saturated;
+        let es = g.e_peak;
         series.push(Series {
             label: Some(format!(
                 "logistic growth: e-folding {:.1} orbits",
@@ -718,7 +772,7 @@ fn eccentricity_panel(modes: &[ModesRow], f: &SuperhumpFigures) -> Panel {
 fn precession_panel(modes: &[ModesRow], p: &Precession) -> Panel {
     let used: Vec<&ModesRow> = modes
         .iter()
-        .filter(|r| r.t / TAU >= p.orbits.0 && r.m1_phase_deg.is_finite())
+        .filter(|r| (p.orbits.0..=p.orbits.1).contains(&(r.t / TAU)) && r.m1_phase_deg.is_finite())
         .collect();
     let peri = unwrap_deg(
         &used
@@ -768,15 +822,19 @@ fn precession_panel(modes: &[ModesRow], p: &Precession) -> Panel {
 /// The table of a q series (one row per run, sorted by q): CSV text.
 pub fn scan_csv(reports: &[(f64, &SuperhumpFigures)]) -> String {
     let mut s = String::from(
-        "q,eccentric,e_saturated,onset_orbit,e_folding_orbits,r_disk_at_onset,epsilon,epsilon_err,epsilon_beat,epsilon_beat_err,amplitude_mag,epsilon_dynamical_r31,epsilon_dynamical_r_disk,epsilon_patterson2005,epsilon_kato2009\n",
+        "q,eccentric,e_peak,peak_orbit,e_saturated,e_end,faded,onset_orbit,e_folding_orbits,r_disk_at_onset,epsilon,epsilon_err,epsilon_beat,epsilon_beat_err,amplitude_mag,epsilon_dynamical_r31,epsilon_dynamical_r_disk,epsilon_patterson2005,epsilon_kato2009\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6}"));
     for (q, f) in reports {
         let p = f.precession.as_ref();
         s.push_str(&format!(
-            "{q},{},{:.6},{},{},{},{},{},{},{},{},{:.6},{},{:.6},{:.6}\n",
+            "{q},{},{:.6},{:.2},{:.6},{:.6},{},{},{},{},{},{},{},{},{},{:.6},{},{:.6},{:.6}\n",
             f.growth.eccentric,
+            f.growth.e_peak,
+            f.growth.peak_orbit,
             f.growth.e_saturated,
+            f.growth.e_end,
+            f.growth.faded,
             o(f.growth.onset_orbit),
             o(f.growth.e_folding_orbits),
             o(f.growth.r_disk_at_onset),
@@ -910,7 +968,11 @@ mod tests {
             .collect();
         let g = growth(&t, &e, &e, &e, &vec![0.45; t.len()]);
         assert!(g.eccentric);
-        assert!((g.e_saturated / es - 1.0).abs() < 1e-3);
+        assert!((g.e_peak / es - 1.0).abs() < 1e-3);
+        assert!(!g.faded);
+        // The median over the active stretch (from 0.8 e_s on) includes the last of the
+        // rise: within 2% below e_s.
+        assert!(g.e_saturated < es && g.e_saturated > 0.98 * es);
         // The linearised logistic is exact but for the one-orbit running mean, which
         // bends e by (γ²/24) e'' terms: 1% here.
         let rate = g.growth_rate_per_orbit.unwrap();
@@ -918,6 +980,34 @@ mod tests {
         // Onset where e = e_s/2: t = ln(e_s/e_0 − 1)/γ.
         let on = (es / e0 - 1.0f64).ln() / gamma;
         assert!((g.onset_orbit.unwrap() - on).abs() < 0.6);
+    }
+
+    #[test]
+    fn a_mode_that_grows_and_fades_is_measured_while_it_lasts() {
+        // e rises as a logistic to 0.2, then decays on 15 orbits from orbit 50.
+        let t: Vec<f64> = (0..5000).map(|k| k as f64 * 0.02).collect();
+        let e: Vec<f64> = t
+            .iter()
+            .map(|&t| {
+                let rise = 0.2 / (1.0 + 199.0 * (-0.3 * t).exp());
+                if t < 50.0 {
+                    rise
+                } else {
+                    rise * (-(t - 50.0) / 15.0).exp()
+                }
+            })
+            .collect();
+        let g = growth(&t, &e, &e, &e, &vec![0.45; t.len()]);
+        assert!(g.eccentric && g.faded);
+        assert!((g.peak_orbit - 50.0).abs() < 0.6, "{g:?}");
+        // Half the peak again at 50 + 15 ln 2 = 60.4 orbits.
+        assert!((g.active_orbits.1 - 60.4).abs() < 0.6, "{g:?}");
+        assert!(
+            (g.growth_rate_per_orbit.unwrap() / 0.3 - 1.0).abs() < 0.02,
+            "{g:?}"
+        );
+        // The last quarter's median: 0.2 e^{−(87.5 − 50)/15} = 0.016.
+        assert!((g.e_end - 0.0164).abs() < 0.001, "{g:?}");
     }
 
     #[test]
@@ -941,7 +1031,7 @@ mod tests {
                 row(t, 0.1, phase)
             })
             .collect();
-        let p = precession(&rows, 0.0).unwrap();
+        let p = precession(&rows, 0.0, f64::INFINITY).unwrap();
         assert!((p.rate - w).abs() < 1e-9, "rate {}", p.rate);
         assert!((p.epsilon_beat - w / (1.0 - w)).abs() < 1e-9);
         assert!(p.rate_err < 1e-9);
