@@ -53,6 +53,9 @@ enum Command {
         /// No progress bar and no report on the terminal (run.log has it all).
         #[arg(long)]
         quiet: bool,
+        /// Replace the files of an earlier run in the output folder (other files stay).
+        #[arg(long, conflicts_with = "resume")]
+        force: bool,
     },
     /// Picture of a snapshot (SPH kernel interpolation onto pixels), or with a run folder
     /// every snapshot of the run as movie frames with one colour scale.
@@ -310,6 +313,7 @@ fn real_main(cli: Cli) -> Result<()> {
             resume,
             stop_after,
             quiet,
+            force,
         } => {
             let (job, out) = match (resume, problem) {
                 (Some(dir), _) => {
@@ -318,6 +322,7 @@ fn real_main(cli: Cli) -> Result<()> {
                         progress: !quiet,
                         from: None,
                         stop_after,
+                        force: false,
                     };
                     (Job::Resume(sets, opts), dir)
                 }
@@ -329,6 +334,7 @@ fn real_main(cli: Cli) -> Result<()> {
                         progress: !quiet,
                         from,
                         stop_after,
+                        force,
                     };
                     (Job::Fresh(Box::new(cfg), opts), out)
                 }

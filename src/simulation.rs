@@ -20,6 +20,7 @@ use crate::io::checkpoint::{self, CheckpointText};
 use crate::io::csv::write_particles;
 use crate::io::hdf5::{RunMetadata, read_snapshot, write_snapshot};
 use crate::io::log::RunLog;
+use crate::io::run_folder::{self, FolderLock};
 use crate::io::snapshot::{PointMassRecord, Snapshot};
 use crate::io::summary::{
     AccretionLedger, Conservation, Flow, MassBudget, MassBudgetRecord, Summary, TotalsRecord,
@@ -48,6 +49,9 @@ pub struct RunOptions {
     pub from: Option<PathBuf>,
     /// Stop after this step (counted from the start of the run), writing a checkpoint.
     pub stop_after: Option<u64>,
+    /// A fresh run into a folder that holds another run's files clears them (`--force`)
+    /// instead of refusing.
+    pub force: bool,
 }
 
 impl RunOptions {
@@ -114,6 +118,7 @@ pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
 
 /// The dimension of the run in `opts.out`, from its newest readable checkpoint.
 pub fn resume_dimension(opts: &RunOptions) -> Result<usize> {
+    run_folder::refuse_if_held(&opts.out)?;
     let newest = checkpoint::list(&opts.out)?;
     let first = newest.first().with_context(|| {
         format!(
@@ -420,9 +425,25 @@ pub fn run_in_team<const D: usize>(
     opts: &RunOptions,
     team: &mut dyn Team<D>,
 ) -> Result<Outcome<D>> {
-    let mut log = if team.is_root() {
+    // The folder is this run's alone while it runs; a fresh run does not mix its files
+    // with another run's.
+    let _lock = if team.is_root() {
         std::fs::create_dir_all(&opts.out)
             .with_context(|| format!("cannot create output folder {}", opts.out.display()))?;
+        let lock = FolderLock::acquire(&opts.out)?;
+        if !opts.force {
+            run_folder::refuse_if_used(&opts.out)?;
+        }
+        Some(lock)
+    } else {
+        None
+    };
+    let mut run = start_fresh::<D>(cfg, opts)?;
+    let mut log = if team.is_root() {
+        // Only now that the set-up stands: a failed one loses nothing.
+        if opts.force {
+            run_folder::clear(&opts.out)?;
+        }
         // The problem file as run (overrides applied), for analyses and for reproducing it.
         let text = toml::to_string(cfg).context("cannot write the configuration")?;
         write_atomic(&opts.out.join("run.toml"), text.as_bytes())?;
@@ -430,7 +451,6 @@ pub fn run_in_team<const D: usize>(
     } else {
         RunLog::silent()
     };
-    let mut run = start_fresh::<D>(cfg, opts)?;
     log.line(&format!(
         "start {}: {} particles, {D}D, t_end = {}, {} ranks × {} threads",
         cfg.name(),
@@ -463,10 +483,13 @@ pub fn resume_in_team<const D: usize>(
     opts: &RunOptions,
     team: &mut dyn Team<D>,
 ) -> Result<Outcome<D>> {
-    let mut log = if team.is_root() {
-        RunLog::open(&opts.out)?
+    let (_lock, mut log) = if team.is_root() {
+        (
+            Some(FolderLock::acquire(&opts.out)?),
+            RunLog::open(&opts.out)?,
+        )
     } else {
-        RunLog::silent()
+        (None, RunLog::silent())
     };
     let mut last_err = None;
     for path in checkpoint::list(&opts.out)? {

@@ -239,6 +239,8 @@ fn bad_restart_input_fails_with_one_clear_line() {
         "run",
         &problem("sedov2d.toml"),
         "--quiet",
+        "--out",
+        &s(&dir.path().join("d")),
         "--from",
         &s(&cut),
     ]);
