@@ -106,31 +106,115 @@ pub fn run(cfg: &Config, opts: &RunOptions) -> Result<Ended> {
     }
 }
 
-/// Continues the run in `opts.out` from its newest readable checkpoint; `overrides` may
+/// Continues the run in `opts.out` from its newest usable checkpoint; `overrides` may
 /// change keys of the problem file as it was run (e.g. `time.end` to extend a run).
 pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
-    match resume_dimension(opts)? {
+    match resume_dimension(overrides, opts)? {
         1 => Ok(resume_with_state::<1>(overrides, opts)?.ended),
         2 => Ok(resume_with_state::<2>(overrides, opts)?.ended),
         _ => Ok(resume_with_state::<3>(overrides, opts)?.ended),
     }
 }
 
-/// The dimension of the run in `opts.out`, from its newest readable checkpoint.
-pub fn resume_dimension(opts: &RunOptions) -> Result<usize> {
+/// The dimension of the run in `opts.out`: that of its newest checkpoint that passes every
+/// check of [`load_checkpoint`].
+pub fn resume_dimension(overrides: &[String], opts: &RunOptions) -> Result<usize> {
     run_folder::refuse_if_held(&opts.out)?;
-    let newest = checkpoint::list(&opts.out)?;
-    let first = newest.first().with_context(|| {
-        format!(
+    let mut first_err = None;
+    for path in checkpoint::list(&opts.out)? {
+        let usable = checkpoint::dimension(&path).and_then(|d| match d {
+            1 => load_checkpoint::<1>(&path, overrides).map(|_| 1),
+            2 => load_checkpoint::<2>(&path, overrides).map(|_| 2),
+            _ => load_checkpoint::<3>(&path, overrides).map(|_| 3),
+        });
+        match usable {
+            Ok(d) => return Ok(d),
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    Err(no_checkpoint(opts, first_err))
+}
+
+/// The error of a run folder none of whose checkpoints can be resumed from.
+fn no_checkpoint(opts: &RunOptions, newest_err: Option<anyhow::Error>) -> anyhow::Error {
+    match newest_err {
+        Some(e) => e.context(format!(
+            "no usable checkpoint to resume from in {}",
+            checkpoint::folder(&opts.out).display()
+        )),
+        None => anyhow::anyhow!(
             "{} has no checkpoint to resume from (looked in {})",
             opts.out.display(),
             checkpoint::folder(&opts.out).display()
-        )
-    })?;
-    checkpoint::dimension(first).or_else(|e| {
-        // The newest may be unreadable; the previous one names the dimension as well.
-        newest.get(1).map_or(Err(e), |p| checkpoint::dimension(p))
-    })
+        ),
+    }
+}
+
+/// A checkpoint read back and checked: its configuration (with `overrides`), loop state,
+/// particles and box.
+struct Resumable<const D: usize> {
+    cfg: Config,
+    st: LoopState,
+    p: Particles<D>,
+    bx: SimBox<D>,
+}
+
+/// Reads the checkpoint at `path` (dimension `D`; checksums verified) and refuses what no
+/// run can have written: a configuration of another dimension, a state that does not
+/// parse, a time outside [0, t_end], a box that is not `D`-dimensional or too small for
+/// the kernel, h not a positive number, a particle with a mass or u out of range, a
+/// position or velocity not finite, a position outside the box, an id twice.
+fn load_checkpoint<const D: usize>(path: &Path, overrides: &[String]) -> Result<Resumable<D>> {
+    let what = path.display();
+    let (text, p) = checkpoint::read::<D>(path)?;
+    let mut table: toml::Table = text
+        .config_toml
+        .parse()
+        .with_context(|| format!("{what}: stored configuration"))?;
+    for o in overrides {
+        crate::config::apply_override(&mut table, o)?;
+    }
+    let cfg = Config::from_table(table).with_context(|| format!("{what}: configuration"))?;
+    if cfg.dimension() != D {
+        bail!(
+            "{what}: the configuration is {}D, the particles {D}D",
+            cfg.dimension()
+        );
+    }
+    let mut st: LoopState = serde_json::from_str(&text.state_json)
+        .with_context(|| format!("{what}: stored run state"))?;
+    if !(st.t_end > 0.0 && st.t_end.is_finite()) {
+        bail!(
+            "{what}: end time t_end = {} is not a positive number",
+            st.t_end
+        );
+    }
+    if !(st.t >= 0.0 && st.t <= st.t_end) {
+        bail!(
+            "{what}: time t = {} outside [0, t_end = {}]",
+            st.t,
+            st.t_end
+        );
+    }
+    let bx = st.sim_box::<D>().with_context(|| format!("{what}"))?;
+    (|| -> Result<()> {
+        if p.is_empty() {
+            bail!("no particles");
+        }
+        problems::check_particles(&p, st.h)?;
+        bx.validate(crate::kernel::KERNEL_SUPPORT * st.h)?;
+        bx.check_inside_closed(&p.pos, &p.id)
+    })()
+    .with_context(|| format!("{what}"))?;
+    if let Some(end) = cfg.time.end
+        && end != st.t_end
+    {
+        st.t_end = end;
+        st.out_times.retain(|&x| x <= end);
+    }
+    Ok(Resumable { cfg, st, p, bx })
 }
 
 /// The processes a run is spread over, as the step loop sees them: one process ([`Solo`]),
@@ -491,27 +575,10 @@ pub fn resume_in_team<const D: usize>(
     } else {
         (None, RunLog::silent())
     };
-    let mut last_err = None;
+    let mut first_err = None;
     for path in checkpoint::list(&opts.out)? {
-        match checkpoint::read::<D>(&path) {
-            Ok((text, p)) => {
-                let mut table: toml::Table = text
-                    .config_toml
-                    .parse()
-                    .with_context(|| format!("{}: stored configuration", path.display()))?;
-                for o in overrides {
-                    crate::config::apply_override(&mut table, o)?;
-                }
-                let cfg = Config::from_table(table)?;
-                let mut st: LoopState = serde_json::from_str(&text.state_json)
-                    .with_context(|| format!("{}: stored run state", path.display()))?;
-                if let Some(end) = cfg.time.end
-                    && end != st.t_end
-                {
-                    st.t_end = end;
-                    st.out_times.retain(|&x| x <= end);
-                }
-                let bx = st.sim_box::<D>()?;
+        match load_checkpoint::<D>(&path, overrides) {
+            Ok(Resumable { cfg, st, p, bx }) => {
                 log.line(&format!(
                     "resume from {} at t = {} (step {})",
                     path.display(),
@@ -523,15 +590,12 @@ pub fn resume_in_team<const D: usize>(
                 return advance(run, opts, log, team);
             }
             Err(e) => {
-                log.line(&format!("skip unreadable checkpoint: {e:#}"));
-                last_err = Some(e);
+                log.line(&format!("skip checkpoint: {e:#}"));
+                first_err.get_or_insert(e);
             }
         }
     }
-    match last_err {
-        Some(e) => Err(e.context("no readable checkpoint to resume from")),
-        None => bail!("{} has no checkpoint to resume from", opts.out.display()),
-    }
+    Err(no_checkpoint(opts, first_err))
 }
 
 /// Set-up, the first evaluation, and the snapshot times of a new run.

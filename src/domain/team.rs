@@ -328,7 +328,7 @@ pub fn run(comm: &mut dyn Comm, cfg: &Config, opts: &RunOptions) -> Result<Ended
 /// (any number of ranks: the checkpoint holds every particle).
 pub fn resume(comm: &mut dyn Comm, overrides: &[String], opts: &RunOptions) -> Result<Ended> {
     let mut team = Distributed::new(comm);
-    Ok(match simulation::resume_dimension(opts)? {
+    Ok(match simulation::resume_dimension(overrides, opts)? {
         1 => simulation::resume_in_team::<1>(overrides, opts, &mut team)?.ended,
         2 => simulation::resume_in_team::<2>(overrides, opts, &mut team)?.ended,
         _ => simulation::resume_in_team::<3>(overrides, opts, &mut team)?.ended,
