@@ -299,6 +299,8 @@ fn execute_mpi(job: &Job) -> Option<Result<Ended>> {
 
 fn real_main(cli: Cli) -> Result<()> {
     if let Some(t) = cli.threads {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        sphdisk::limits::check_threads(t, cores)?;
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
@@ -481,10 +483,17 @@ fn real_main(cli: Cli) -> Result<()> {
         }
         Command::Check { problem, sets } => {
             let cfg = Config::load(&problem, &sets)?;
+            // The set-up with its checks, and the run's snapshot times (a run checks both
+            // before it starts).
+            fn checked<const D: usize>(cfg: &Config) -> Result<usize> {
+                let s = sphdisk::problems::setup::<D>(cfg)?;
+                sphdisk::simulation::snapshot_times(cfg, s.t_end, s.output_times)?;
+                Ok(s.particles.len())
+            }
             let n = match cfg.dimension() {
-                1 => sphdisk::problems::setup::<1>(&cfg)?.particles.len(),
-                2 => sphdisk::problems::setup::<2>(&cfg)?.particles.len(),
-                _ => sphdisk::problems::setup::<3>(&cfg)?.particles.len(),
+                1 => checked::<1>(&cfg)?,
+                2 => checked::<2>(&cfg)?,
+                _ => checked::<3>(&cfg)?,
             };
             println!(
                 "{}: ok ({} particles, {}D)",

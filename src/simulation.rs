@@ -205,7 +205,8 @@ fn load_checkpoint<const D: usize>(path: &Path, overrides: &[String]) -> Result<
         }
         problems::check_particles(&p, st.h)?;
         bx.validate(crate::kernel::KERNEL_SUPPORT * st.h)?;
-        bx.check_inside_closed(&p.pos, &p.id)
+        bx.check_inside_closed(&p.pos, &p.id)?;
+        crate::limits::check_grid(&cfg, &bx, st.h, &p.pos)
     })()
     .with_context(|| format!("{what}"))?;
     if let Some(end) = cfg.time.end
@@ -598,6 +599,32 @@ pub fn resume_in_team<const D: usize>(
     Err(no_checkpoint(opts, first_err))
 }
 
+/// The end time of a run (`time.end`, or the problem's own `problem_t_end`) and its
+/// snapshot times: multiples of `output.interval` and the problem's own `times`, at most
+/// [`MAX_SNAPSHOTS`](crate::limits::MAX_SNAPSHOTS) of them (refused before any is made).
+pub fn snapshot_times(
+    cfg: &Config,
+    problem_t_end: Option<f64>,
+    times: Vec<f64>,
+) -> Result<(f64, Vec<f64>)> {
+    let t_end = cfg
+        .time
+        .end
+        .or(problem_t_end)
+        .context("key `time.end`: missing")?;
+    let mut out_times: Vec<f64> = times
+        .into_iter()
+        .filter(|&x| x > 0.0 && x <= t_end)
+        .collect();
+    if let Some(iv) = cfg.output.interval.filter(|&i| i > 0.0) {
+        let k_max = crate::limits::check_snapshot_count(iv, t_end)?;
+        out_times.extend((1..=k_max).map(|k| k as f64 * iv));
+    }
+    out_times.sort_by(f64::total_cmp);
+    out_times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t_end);
+    Ok((t_end, out_times))
+}
+
 /// Set-up, the first evaluation, and the snapshot times of a new run.
 fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>> {
     let InitialState {
@@ -618,6 +645,7 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
                 .with_context(|| format!("--from {}", path.display()))?;
             let state = InitialState::new(p, bx, h);
             problems::check_initial_state(&state)
+                .and_then(|_| crate::limits::check_grid(cfg, &bx, h, &state.particles.pos))
                 .with_context(|| format!("--from {}", path.display()))?;
             if let Some(inj) = &mut injector {
                 // New stream particles take ids after the file's.
@@ -628,22 +656,7 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
             state.particles
         }
     };
-    let t_end = cfg
-        .time
-        .end
-        .or(problem_t_end)
-        .context("key `time.end`: missing")?;
-    // Snapshot times: multiples of output.interval and the problem's own times.
-    let mut out_times: Vec<f64> = output_times
-        .into_iter()
-        .filter(|&x| x > 0.0 && x <= t_end)
-        .collect();
-    if let Some(iv) = cfg.output.interval.filter(|&i| i > 0.0) {
-        let k_max = (t_end / iv * (1.0 + 1e-12)).floor() as usize;
-        out_times.extend((1..=k_max).map(|k| k as f64 * iv));
-    }
-    out_times.sort_by(f64::total_cmp);
-    out_times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t_end);
+    let (t_end, out_times) = snapshot_times(cfg, problem_t_end, output_times)?;
 
     let zero = TotalsRecord::from(&particles.totals(None));
     let st = LoopState {

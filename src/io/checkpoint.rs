@@ -1,8 +1,9 @@
 //! Checkpoints: the complete state of a run at the end of a step (every particle array at
 //! full precision, the run loop's counters, the problem file as run), so that
 //! `sphdisk run --resume` continues bit for bit. One HDF5 file per checkpoint in
-//! `<run>/checkpoints/ckpt_<step>.hdf5`, written atomically (temporary file, fsync, rename);
-//! the newest two are kept, so a run killed while writing still has a complete one.
+//! `<run>/checkpoints/ckpt_<step>.hdf5` with a checksum of every array, written atomically
+//! (temporary file, fsync, rename); the newest two are kept, so a run killed while writing
+//! still has a complete one.
 
 use std::path::{Path, PathBuf};
 

@@ -88,6 +88,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         ProblemKind::Cv => cv::setup(cfg)?,
     };
     check_initial_state(&state)?;
+    crate::limits::check_grid(cfg, &state.bx, state.h, &state.particles.pos)?;
     Ok(state)
 }
 

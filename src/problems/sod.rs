@@ -65,25 +65,38 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     }
     let mut p = Particles::new();
     let eos = cfg.eos;
-    let mut add_block =
-        |lo_x: f64, spacing: [f64; D], counts: [usize; D], st: crate::config::StateParams| {
-            let mut lo = [0.0; D];
-            lo[0] = lo_x;
-            for x in lattice::cuboid(lo, spacing, counts) {
-                let mut v = [0.0; D];
-                v[0] = st.v;
-                let id = p.len() as u64;
-                p.push(id, x, v, mass, eos.internal_energy(st.rho, st.p));
-            }
-        };
+    let mut add_block = |lo_x: f64,
+                         spacing: [f64; D],
+                         counts: [usize; D],
+                         st: crate::config::StateParams|
+     -> Result<()> {
+        let mut lo = [0.0; D];
+        lo[0] = lo_x;
+        for x in lattice::cuboid(lo, spacing, counts)? {
+            let mut v = [0.0; D];
+            v[0] = st.v;
+            let id = p.len() as u64;
+            p.push(id, x, v, mass, eos.internal_energy(st.rho, st.p));
+        }
+        Ok(())
+    };
     let mut counts_l = [n_cross_l; D];
     counts_l[0] = n;
     let mut counts_r = [n_cross_r; D];
     counts_r[0] = n_x_r;
     let mut sp_r = [dy_r; D];
     sp_r[0] = dx_r;
-    add_block(0.0, [dx; D], counts_l, l);
-    add_block(s.x0, sp_r, counts_r, r);
+    // Both blocks together within the bound, before either is built.
+    let both = crate::limits::lattice_count(counts_l)? as u64
+        + crate::limits::lattice_count(counts_r)? as u64;
+    if both > crate::limits::MAX_PARTICLES {
+        bail!(
+            "key `particles.n`: the tube would hold {both} particles, more than the {} a run can hold",
+            crate::limits::MAX_PARTICLES
+        );
+    }
+    add_block(0.0, [dx; D], counts_l, l)?;
+    add_block(s.x0, sp_r, counts_r, r)?;
 
     let mut max = [width; D];
     max[0] = s.length;
