@@ -109,6 +109,7 @@ pub fn run(cfg: &Config, opts: &RunOptions) -> Result<Ended> {
 /// Continues the run in `opts.out` from its newest usable checkpoint; `overrides` may
 /// change keys of the problem file as it was run (e.g. `time.end` to extend a run).
 pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
+    run_folder::refuse_if_held(&opts.out)?;
     match resume_dimension(overrides, opts)? {
         1 => Ok(resume_with_state::<1>(overrides, opts)?.ended),
         2 => Ok(resume_with_state::<2>(overrides, opts)?.ended),
@@ -119,7 +120,6 @@ pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
 /// The dimension of the run in `opts.out`: that of its newest checkpoint that passes every
 /// check of [`load_checkpoint`].
 pub fn resume_dimension(overrides: &[String], opts: &RunOptions) -> Result<usize> {
-    run_folder::refuse_if_held(&opts.out)?;
     let mut first_err = None;
     for path in checkpoint::list(&opts.out)? {
         let usable = checkpoint::dimension(&path).and_then(|d| match d {
