@@ -156,6 +156,16 @@ fn force_leaves_only_the_new_runs_files() {
     assert!(!out.join(LOCK).exists(), "the lock goes with the run");
 }
 
+/// A child process killed when this goes, also when an assertion fails first.
+struct Child(std::process::Child);
+
+impl Drop for Child {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// Waits until `path` exists (at most a minute).
 fn wait_for(path: &Path) {
     let start = Instant::now();
@@ -171,7 +181,7 @@ fn a_second_run_into_a_held_folder_fails_naming_the_lock() {
     let out = dir.path().join("blast");
     let o = s(&out);
     // A run that lasts: 64² particles to t = 10.
-    let mut first = Command::new(env!("CARGO_BIN_EXE_sphdisk"))
+    let first = Command::new(env!("CARGO_BIN_EXE_sphdisk"))
         .args([
             "run",
             &problem("sedov2d.toml"),
@@ -186,12 +196,12 @@ fn a_second_run_into_a_held_folder_fails_naming_the_lock() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
+    let first = Child(first);
     wait_for(&out.join(LOCK));
-    let pid = first.id().to_string();
+    let pid = first.0.id().to_string();
     fails(&strs(&new_run_args(&o, &["--force"])), &[&o, &pid, LOCK]);
     fails(&["run", "--quiet", "--resume", &o], &[&o, &pid, LOCK]);
-    first.kill().unwrap();
-    first.wait().unwrap();
+    drop(first);
     // The killed run's lock is stale: a new run takes the folder over.
     assert!(out.join(LOCK).exists());
     let (code, err) = sphdisk(&strs(&new_run_args(&o, &["--force"])));
