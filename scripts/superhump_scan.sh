@@ -35,7 +35,8 @@ for q in "${qs[@]}"; do
     "$bin" run --resume "$dir" --quiet
   else
     echo "q = $q: $orbits orbits, initial disk to r_out = $r_out a, into $dir"
-    "$bin" run problems/superhump.toml --quiet --out "$dir" \
+    # --force: the folder is this script's own (a run killed before its first checkpoint).
+    "$bin" run problems/superhump.toml --quiet --force --out "$dir" \
       --set binary.q="$q" --set initial_disk.r_out="$r_out" --set time.end="$end"
   fi
 done

@@ -39,13 +39,17 @@ pub struct BenchResult {
 
 /// A jittered cubic lattice of about `n` particles in the unit periodic box, with h set for
 /// about `neighbours` partners within the support: (4π/3)(2h)³ n = neighbours.
-pub fn uniform_box(n: usize, neighbours: f64, seed: u64) -> (Particles<3>, SimBox<3>, f64) {
+pub fn uniform_box(
+    n: usize,
+    neighbours: f64,
+    seed: u64,
+) -> anyhow::Result<(Particles<3>, SimBox<3>, f64)> {
     let k = (n as f64).cbrt().round().max(2.0) as usize;
     let dx = 1.0 / k as f64;
     let mut rng = Rng::new(seed);
     let mut p = Particles::new();
     let total = (k * k * k) as f64;
-    for x in lattice::cuboid([0.0; 3], [dx; 3], [k; 3]) {
+    for x in lattice::cuboid([0.0; 3], [dx; 3], [k; 3])? {
         let jitter: [f64; 3] =
             std::array::from_fn(|d| (x[d] + 0.2 * dx * (rng.uniform() - 0.5)).rem_euclid(1.0));
         let v: [f64; 3] = std::array::from_fn(|_| 0.01 * rng.normal());
@@ -58,12 +62,12 @@ pub fn uniform_box(n: usize, neighbours: f64, seed: u64) -> (Particles<3>, SimBo
         max: [1.0; 3],
         kinds: [BoundaryKind::Periodic; 3],
     };
-    (p, bx, 0.5 * support)
+    Ok((p, bx, 0.5 * support))
 }
 
 /// Runs `steps` KDK steps (after one warm-up evaluation) with the current rayon pool.
 pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Result<BenchResult> {
-    let (mut p, bx, h) = uniform_box(n, neighbours, 7);
+    let (mut p, bx, h) = uniform_box(n, neighbours, 7)?;
     let phys = Physics::hydro(
         Kernel::<3>::new(h),
         Eos::Ideal { gamma: 5.0 / 3.0 },

@@ -73,21 +73,33 @@ impl<const D: usize> SimBox<D> {
 
     /// Refuses particles outside a periodic or reflecting box, naming the first offender.
     pub fn check_inside(&self, pos: &[Vec<f64>; D], id: &[u64]) -> Result<()> {
+        self.check_within(pos, id, false)
+    }
+
+    /// As [`check_inside`](Self::check_inside), but the upper faces count as inside: where
+    /// a run's own drift may leave a particle (reflected or wrapped to round-off).
+    pub fn check_inside_closed(&self, pos: &[Vec<f64>; D], id: &[u64]) -> Result<()> {
+        self.check_within(pos, id, true)
+    }
+
+    fn check_within(&self, pos: &[Vec<f64>; D], id: &[u64], closed: bool) -> Result<()> {
         for d in 0..D {
             if self.kinds[d] == BoundaryKind::Open {
                 continue;
             }
             for (i, &x) in pos[d].iter().enumerate() {
-                if !(x >= self.min[d] && x < self.max[d]) {
+                let below_max = x < self.max[d] || closed && x == self.max[d];
+                if !(x >= self.min[d] && below_max) {
                     bail!(
-                        "particle {} lies outside the {:?} box along {}: {} = {} not in [{}, {})",
+                        "particle {} lies outside the {:?} box along {}: {} = {} not in [{}, {}{}",
                         id[i],
                         self.kinds[d],
                         AXES[d],
                         AXES[d],
                         x,
                         self.min[d],
-                        self.max[d]
+                        self.max[d],
+                        if closed { "]" } else { ")" }
                     );
                 }
             }

@@ -527,6 +527,9 @@ impl Config {
         if self.output.files_per_snapshot == Some(0) {
             bail!("key `output.files_per_snapshot`: must be ≥ 1, got 0");
         }
+        if let Some(files) = self.output.files_per_snapshot {
+            crate::limits::check_files_per_snapshot(files)?;
+        }
         if self.output.checkpoint_steps == Some(0) {
             bail!("key `output.checkpoint_steps`: must be ≥ 1, got 0");
         }
@@ -547,6 +550,10 @@ impl Config {
                     self.problem.kind.name()
                 ),
                 Some(0) => bail!("key `particles.n`: must be > 0, got 0"),
+                Some(n) if n as u64 > crate::limits::MAX_PARTICLES => bail!(
+                    "key `particles.n`: at most {}, got {n}",
+                    crate::limits::MAX_PARTICLES
+                ),
                 Some(_) => {}
             }
             if self.particles.h.is_none() && self.particles.h_factor.is_none() {

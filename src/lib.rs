@@ -12,6 +12,7 @@ pub mod grid;
 pub mod integrate;
 pub mod io;
 pub mod kernel;
+pub mod limits;
 pub mod particles;
 pub mod physics;
 pub mod problems;

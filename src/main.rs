@@ -53,6 +53,9 @@ enum Command {
         /// No progress bar and no report on the terminal (run.log has it all).
         #[arg(long)]
         quiet: bool,
+        /// Replace the files of an earlier run in the output folder (other files stay).
+        #[arg(long, conflicts_with = "resume")]
+        force: bool,
     },
     /// Picture of a snapshot (SPH kernel interpolation onto pixels), or with a run folder
     /// every snapshot of the run as movie frames with one colour scale.
@@ -308,6 +311,8 @@ fn execute_mpi(job: &Job) -> Option<Result<Ended>> {
 
 fn real_main(cli: Cli) -> Result<()> {
     if let Some(t) = cli.threads {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        sphdisk::limits::check_threads(t, cores)?;
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
@@ -322,6 +327,7 @@ fn real_main(cli: Cli) -> Result<()> {
             resume,
             stop_after,
             quiet,
+            force,
         } => {
             let (job, out) = match (resume, problem) {
                 (Some(dir), _) => {
@@ -330,6 +336,7 @@ fn real_main(cli: Cli) -> Result<()> {
                         progress: !quiet,
                         from: None,
                         stop_after,
+                        force: false,
                     };
                     (Job::Resume(sets, opts), dir)
                 }
@@ -341,6 +348,7 @@ fn real_main(cli: Cli) -> Result<()> {
                         progress: !quiet,
                         from,
                         stop_after,
+                        force,
                     };
                     (Job::Fresh(Box::new(cfg), opts), out)
                 }
@@ -517,10 +525,17 @@ fn real_main(cli: Cli) -> Result<()> {
         }
         Command::Check { problem, sets } => {
             let cfg = Config::load(&problem, &sets)?;
+            // The set-up with its checks, and the run's snapshot times (a run checks both
+            // before it starts).
+            fn checked<const D: usize>(cfg: &Config) -> Result<usize> {
+                let s = sphdisk::problems::setup::<D>(cfg)?;
+                sphdisk::simulation::snapshot_times(cfg, s.t_end, s.output_times)?;
+                Ok(s.particles.len())
+            }
             let n = match cfg.dimension() {
-                1 => sphdisk::problems::setup::<1>(&cfg)?.particles.len(),
-                2 => sphdisk::problems::setup::<2>(&cfg)?.particles.len(),
-                _ => sphdisk::problems::setup::<3>(&cfg)?.particles.len(),
+                1 => checked::<1>(&cfg)?,
+                2 => checked::<2>(&cfg)?,
+                _ => checked::<3>(&cfg)?,
             };
             println!(
                 "{}: ok ({} particles, {}D)",

@@ -20,6 +20,7 @@ use crate::io::checkpoint::{self, CheckpointText};
 use crate::io::csv::write_particles;
 use crate::io::hdf5::{RunMetadata, read_snapshot, write_snapshot};
 use crate::io::log::RunLog;
+use crate::io::run_folder::{self, FolderLock};
 use crate::io::snapshot::{PointMassRecord, Snapshot};
 use crate::io::summary::{
     AccretionLedger, Conservation, Flow, MassBudget, MassBudgetRecord, Summary, TotalsRecord,
@@ -48,6 +49,9 @@ pub struct RunOptions {
     pub from: Option<PathBuf>,
     /// Stop after this step (counted from the start of the run), writing a checkpoint.
     pub stop_after: Option<u64>,
+    /// A fresh run into a folder that holds another run's files clears them (`--force`)
+    /// instead of refusing.
+    pub force: bool,
 }
 
 impl RunOptions {
@@ -102,30 +106,116 @@ pub fn run(cfg: &Config, opts: &RunOptions) -> Result<Ended> {
     }
 }
 
-/// Continues the run in `opts.out` from its newest readable checkpoint; `overrides` may
+/// Continues the run in `opts.out` from its newest usable checkpoint; `overrides` may
 /// change keys of the problem file as it was run (e.g. `time.end` to extend a run).
 pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
-    match resume_dimension(opts)? {
+    run_folder::refuse_if_held(&opts.out)?;
+    match resume_dimension(overrides, opts)? {
         1 => Ok(resume_with_state::<1>(overrides, opts)?.ended),
         2 => Ok(resume_with_state::<2>(overrides, opts)?.ended),
         _ => Ok(resume_with_state::<3>(overrides, opts)?.ended),
     }
 }
 
-/// The dimension of the run in `opts.out`, from its newest readable checkpoint.
-pub fn resume_dimension(opts: &RunOptions) -> Result<usize> {
-    let newest = checkpoint::list(&opts.out)?;
-    let first = newest.first().with_context(|| {
-        format!(
+/// The dimension of the run in `opts.out`: that of its newest checkpoint that passes every
+/// check of [`load_checkpoint`].
+pub fn resume_dimension(overrides: &[String], opts: &RunOptions) -> Result<usize> {
+    let mut first_err = None;
+    for path in checkpoint::list(&opts.out)? {
+        let usable = checkpoint::dimension(&path).and_then(|d| match d {
+            1 => load_checkpoint::<1>(&path, overrides).map(|_| 1),
+            2 => load_checkpoint::<2>(&path, overrides).map(|_| 2),
+            _ => load_checkpoint::<3>(&path, overrides).map(|_| 3),
+        });
+        match usable {
+            Ok(d) => return Ok(d),
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    Err(no_checkpoint(opts, first_err))
+}
+
+/// The error of a run folder none of whose checkpoints can be resumed from.
+fn no_checkpoint(opts: &RunOptions, newest_err: Option<anyhow::Error>) -> anyhow::Error {
+    match newest_err {
+        Some(e) => e.context(format!(
+            "no usable checkpoint to resume from in {}",
+            checkpoint::folder(&opts.out).display()
+        )),
+        None => anyhow::anyhow!(
             "{} has no checkpoint to resume from (looked in {})",
             opts.out.display(),
             checkpoint::folder(&opts.out).display()
-        )
-    })?;
-    checkpoint::dimension(first).or_else(|e| {
-        // The newest may be unreadable; the previous one names the dimension as well.
-        newest.get(1).map_or(Err(e), |p| checkpoint::dimension(p))
-    })
+        ),
+    }
+}
+
+/// A checkpoint read back and checked: its configuration (with `overrides`), loop state,
+/// particles and box.
+struct Resumable<const D: usize> {
+    cfg: Config,
+    st: LoopState,
+    p: Particles<D>,
+    bx: SimBox<D>,
+}
+
+/// Reads the checkpoint at `path` (dimension `D`; checksums verified) and refuses what no
+/// run can have written: a configuration of another dimension, a state that does not
+/// parse, a time outside [0, t_end], a box that is not `D`-dimensional or too small for
+/// the kernel, h not a positive number, a particle with a mass or u out of range, a
+/// position or velocity not finite, a position outside the box, an id twice.
+fn load_checkpoint<const D: usize>(path: &Path, overrides: &[String]) -> Result<Resumable<D>> {
+    let what = path.display();
+    let (text, p) = checkpoint::read::<D>(path)?;
+    let mut table: toml::Table = text
+        .config_toml
+        .parse()
+        .with_context(|| format!("{what}: stored configuration"))?;
+    for o in overrides {
+        crate::config::apply_override(&mut table, o)?;
+    }
+    let cfg = Config::from_table(table).with_context(|| format!("{what}: configuration"))?;
+    if cfg.dimension() != D {
+        bail!(
+            "{what}: the configuration is {}D, the particles {D}D",
+            cfg.dimension()
+        );
+    }
+    let mut st: LoopState = serde_json::from_str(&text.state_json)
+        .with_context(|| format!("{what}: stored run state"))?;
+    if !(st.t_end > 0.0 && st.t_end.is_finite()) {
+        bail!(
+            "{what}: end time t_end = {} is not a positive number",
+            st.t_end
+        );
+    }
+    if !(st.t >= 0.0 && st.t <= st.t_end) {
+        bail!(
+            "{what}: time t = {} outside [0, t_end = {}]",
+            st.t,
+            st.t_end
+        );
+    }
+    let bx = st.sim_box::<D>().with_context(|| format!("{what}"))?;
+    (|| -> Result<()> {
+        if p.is_empty() {
+            bail!("no particles");
+        }
+        problems::check_particles(&p, st.h)?;
+        bx.validate(crate::kernel::KERNEL_SUPPORT * st.h)?;
+        bx.check_inside_closed(&p.pos, &p.id)?;
+        crate::limits::check_grid(&cfg, &bx, st.h, &p.pos)
+    })()
+    .with_context(|| format!("{what}"))?;
+    if let Some(end) = cfg.time.end
+        && end != st.t_end
+    {
+        st.t_end = end;
+        st.out_times.retain(|&x| x <= end);
+    }
+    Ok(Resumable { cfg, st, p, bx })
 }
 
 /// The processes a run is spread over, as the step loop sees them: one process ([`Solo`]),
@@ -420,9 +510,25 @@ pub fn run_in_team<const D: usize>(
     opts: &RunOptions,
     team: &mut dyn Team<D>,
 ) -> Result<Outcome<D>> {
-    let mut log = if team.is_root() {
+    // The folder is this run's alone while it runs; a fresh run does not mix its files
+    // with another run's.
+    let _lock = if team.is_root() {
         std::fs::create_dir_all(&opts.out)
             .with_context(|| format!("cannot create output folder {}", opts.out.display()))?;
+        let lock = FolderLock::acquire(&opts.out)?;
+        if !opts.force {
+            run_folder::refuse_if_used(&opts.out)?;
+        }
+        Some(lock)
+    } else {
+        None
+    };
+    let mut run = start_fresh::<D>(cfg, opts)?;
+    let mut log = if team.is_root() {
+        // Only now that the set-up stands: a failed one loses nothing.
+        if opts.force {
+            run_folder::clear(&opts.out)?;
+        }
         // The problem file as run (overrides applied), for analyses and for reproducing it.
         let text = toml::to_string(cfg).context("cannot write the configuration")?;
         write_atomic(&opts.out.join("run.toml"), text.as_bytes())?;
@@ -430,7 +536,6 @@ pub fn run_in_team<const D: usize>(
     } else {
         RunLog::silent()
     };
-    let mut run = start_fresh::<D>(cfg, opts)?;
     log.line(&format!(
         "start {}: {} particles, {D}D, t_end = {}, {} ranks × {} threads",
         cfg.name(),
@@ -463,32 +568,18 @@ pub fn resume_in_team<const D: usize>(
     opts: &RunOptions,
     team: &mut dyn Team<D>,
 ) -> Result<Outcome<D>> {
-    let mut log = if team.is_root() {
-        RunLog::open(&opts.out)?
+    let (_lock, mut log) = if team.is_root() {
+        (
+            Some(FolderLock::acquire(&opts.out)?),
+            RunLog::open(&opts.out)?,
+        )
     } else {
-        RunLog::silent()
+        (None, RunLog::silent())
     };
-    let mut last_err = None;
+    let mut first_err = None;
     for path in checkpoint::list(&opts.out)? {
-        match checkpoint::read::<D>(&path) {
-            Ok((text, p)) => {
-                let mut table: toml::Table = text
-                    .config_toml
-                    .parse()
-                    .with_context(|| format!("{}: stored configuration", path.display()))?;
-                for o in overrides {
-                    crate::config::apply_override(&mut table, o)?;
-                }
-                let cfg = Config::from_table(table)?;
-                let mut st: LoopState = serde_json::from_str(&text.state_json)
-                    .with_context(|| format!("{}: stored run state", path.display()))?;
-                if let Some(end) = cfg.time.end
-                    && end != st.t_end
-                {
-                    st.t_end = end;
-                    st.out_times.retain(|&x| x <= end);
-                }
-                let bx = st.sim_box::<D>()?;
+        match load_checkpoint::<D>(&path, overrides) {
+            Ok(Resumable { cfg, st, p, bx }) => {
                 log.line(&format!(
                     "resume from {} at t = {} (step {})",
                     path.display(),
@@ -500,15 +591,38 @@ pub fn resume_in_team<const D: usize>(
                 return advance(run, opts, log, team);
             }
             Err(e) => {
-                log.line(&format!("skip unreadable checkpoint: {e:#}"));
-                last_err = Some(e);
+                log.line(&format!("skip checkpoint: {e:#}"));
+                first_err.get_or_insert(e);
             }
         }
     }
-    match last_err {
-        Some(e) => Err(e.context("no readable checkpoint to resume from")),
-        None => bail!("{} has no checkpoint to resume from", opts.out.display()),
+    Err(no_checkpoint(opts, first_err))
+}
+
+/// The end time of a run (`time.end`, or the problem's own `problem_t_end`) and its
+/// snapshot times: multiples of `output.interval` and the problem's own `times`, at most
+/// [`MAX_SNAPSHOTS`](crate::limits::MAX_SNAPSHOTS) of them (refused before any is made).
+pub fn snapshot_times(
+    cfg: &Config,
+    problem_t_end: Option<f64>,
+    times: Vec<f64>,
+) -> Result<(f64, Vec<f64>)> {
+    let t_end = cfg
+        .time
+        .end
+        .or(problem_t_end)
+        .context("key `time.end`: missing")?;
+    let mut out_times: Vec<f64> = times
+        .into_iter()
+        .filter(|&x| x > 0.0 && x <= t_end)
+        .collect();
+    if let Some(iv) = cfg.output.interval.filter(|&i| i > 0.0) {
+        let k_max = crate::limits::check_snapshot_count(iv, t_end)?;
+        out_times.extend((1..=k_max).map(|k| k as f64 * iv));
     }
+    out_times.sort_by(f64::total_cmp);
+    out_times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t_end);
+    Ok((t_end, out_times))
 }
 
 /// Set-up, the first evaluation, and the snapshot times of a new run.
@@ -531,6 +645,7 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
                 .with_context(|| format!("--from {}", path.display()))?;
             let state = InitialState::new(p, bx, h);
             problems::check_initial_state(&state)
+                .and_then(|_| crate::limits::check_grid(cfg, &bx, h, &state.particles.pos))
                 .with_context(|| format!("--from {}", path.display()))?;
             if let Some(inj) = &mut injector {
                 // New stream particles take ids after the file's.
@@ -541,22 +656,7 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
             state.particles
         }
     };
-    let t_end = cfg
-        .time
-        .end
-        .or(problem_t_end)
-        .context("key `time.end`: missing")?;
-    // Snapshot times: multiples of output.interval and the problem's own times.
-    let mut out_times: Vec<f64> = output_times
-        .into_iter()
-        .filter(|&x| x > 0.0 && x <= t_end)
-        .collect();
-    if let Some(iv) = cfg.output.interval.filter(|&i| i > 0.0) {
-        let k_max = (t_end / iv * (1.0 + 1e-12)).floor() as usize;
-        out_times.extend((1..=k_max).map(|k| k as f64 * iv));
-    }
-    out_times.sort_by(f64::total_cmp);
-    out_times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t_end);
+    let (t_end, out_times) = snapshot_times(cfg, problem_t_end, output_times)?;
 
     let zero = TotalsRecord::from(&particles.totals(None));
     let st = LoopState {

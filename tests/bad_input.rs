@@ -370,3 +370,62 @@ fn bad_binaries_and_streams_are_named() {
         &["[stream]", "[binary]"],
     );
 }
+
+#[test]
+fn values_that_pass_validation_are_bounded_before_anything_is_allocated() {
+    // Each of these panicked (capacity overflow, index out of bounds) or aborted on an
+    // allocation; now `check` and `run` refuse it naming the key.
+    let d = tempfile::tempdir().unwrap();
+    let cases: [(&str, &[&str], &[&str]); 8] = [
+        (
+            "sod.toml",
+            &["time.end=1e308"],
+            &["output.interval", "snapshots"],
+        ),
+        (
+            "sod.toml",
+            &["output.interval=1e-300"],
+            &["output.interval", "snapshots"],
+        ),
+        (
+            "sedov.toml",
+            &["particles.n=2097153"],
+            &["particles.n", "2097153 × 2097153"],
+        ),
+        ("sod3d.toml", &["particles.n=2097153"], &["particles.n"]),
+        (
+            "sod.toml",
+            &["particles.h_factor=1e-308"],
+            &["particles.h_factor", "neighbour grid"],
+        ),
+        (
+            "sod.toml",
+            &["particles.h=1e-300"],
+            &["particles.h", "neighbour grid"],
+        ),
+        (
+            "disk3d.toml",
+            &["particles.h_factor=1e-308"],
+            &["particles.h_factor", "neighbour grid"],
+        ),
+        (
+            "sod.toml",
+            &["output.files_per_snapshot=1000000000"],
+            &["output.files_per_snapshot", "4096"],
+        ),
+    ];
+    for (file, sets, expect) in cases {
+        assert_check_and_run_fail(d.path(), &problem(file), sets, expect);
+    }
+    // Threads: at most 16 per core, for every command.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let many = (16 * cores + 1).to_string();
+    let p = problem("sod.toml");
+    for command in [
+        &["check", &p][..],
+        &["run", &p, "--quiet", "--out", "out"][..],
+    ] {
+        let args = [&["--threads", &many][..], command].concat();
+        assert_fails(d.path(), &args, &["--threads", &many]);
+    }
+}

@@ -53,7 +53,7 @@ fn shear_wave_decay_rate<const D: usize>(n: usize, h_dx: f64, nu: f64) -> (f64, 
     let h = h_dx * dx;
     let k = std::f64::consts::TAU;
     let mut p = Particles::<D>::new();
-    for x in lattice::cuboid([0.0; D], [dx; D], [n; D]) {
+    for x in lattice::cuboid([0.0; D], [dx; D], [n; D]).unwrap() {
         let id = p.len() as u64;
         let v: [f64; D] =
             std::array::from_fn(|d| if d == 1 { 0.01 * (k * x[0]).sin() } else { 0.0 });
@@ -121,7 +121,7 @@ fn random_box<const D: usize>(n: usize, seed: u64) -> Particles<D> {
     let mut rng = Rng::new(seed);
     let dx = 1.0 / n as f64;
     let mut p = Particles::new();
-    for x in lattice::cuboid([0.0; D], [dx; D], [n; D]) {
+    for x in lattice::cuboid([0.0; D], [dx; D], [n; D]).unwrap() {
         let pos: [f64; D] =
             std::array::from_fn(|d| (x[d] + 0.3 * dx * (rng.uniform() - 0.5)).rem_euclid(1.0));
         let vel: [f64; D] = std::array::from_fn(|_| rng.normal());
@@ -215,7 +215,7 @@ fn shear_wave_steps(dt: f64) -> (f64, f64, f64, f64) {
     let h = 1.5 * dx;
     let k = std::f64::consts::TAU;
     let mut p = Particles::<2>::new();
-    for x in lattice::cuboid([0.0; 2], [dx; 2], [n; 2]) {
+    for x in lattice::cuboid([0.0; 2], [dx; 2], [n; 2]).unwrap() {
         let id = p.len() as u64;
         p.push(id, x, [0.0, 0.05 * (k * x[0]).sin()], dx * dx, 0.01);
     }

@@ -327,8 +327,12 @@ pub fn run(comm: &mut dyn Comm, cfg: &Config, opts: &RunOptions) -> Result<Ended
 /// Continues the run in `opts.out` from its newest checkpoint on the ranks of `comm`
 /// (any number of ranks: the checkpoint holds every particle).
 pub fn resume(comm: &mut dyn Comm, overrides: &[String], opts: &RunOptions) -> Result<Ended> {
+    // Rank 0 takes the folder's lock; the others, in other processes, must not see it.
+    if comm.rank() == 0 {
+        crate::io::run_folder::refuse_if_held(&opts.out)?;
+    }
     let mut team = Distributed::new(comm);
-    Ok(match simulation::resume_dimension(opts)? {
+    Ok(match simulation::resume_dimension(overrides, opts)? {
         1 => simulation::resume_in_team::<1>(overrides, opts, &mut team)?.ended,
         2 => simulation::resume_in_team::<2>(overrides, opts, &mut team)?.ended,
         _ => simulation::resume_in_team::<3>(overrides, opts, &mut team)?.ended,

@@ -1,8 +1,9 @@
 //! Checkpoints: the complete state of a run at the end of a step (every particle array at
 //! full precision, the run loop's counters, the problem file as run), so that
 //! `sphdisk run --resume` continues bit for bit. One HDF5 file per checkpoint in
-//! `<run>/checkpoints/ckpt_<step>.hdf5`, written atomically (temporary file, fsync, rename);
-//! the newest two are kept, so a run killed while writing still has a complete one.
+//! `<run>/checkpoints/ckpt_<step>.hdf5` with a checksum of every array, written atomically
+//! (temporary file, fsync, rename); the newest two are kept, so a run killed while writing
+//! still has a complete one.
 
 use std::path::{Path, PathBuf};
 
@@ -53,6 +54,7 @@ pub fn write<const D: usize>(
         g.create_dataset(&name).with_f64_data(v);
     }
     fb.add_group(g.finish());
+    fb.set_attr("Checksums", AttrValue::U64Array(checksums(text, p)));
     let bytes = fb
         .finish()
         .with_context(|| format!("cannot encode checkpoint {}", path.display()))?;
@@ -62,6 +64,49 @@ pub fn write<const D: usize>(
             .with_context(|| format!("cannot remove old checkpoint {}", old.display()))?;
     }
     Ok(path)
+}
+
+/// 64-bit FNV-1a of `bytes`, continuing from `hash`.
+fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(hash, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// The names of what [`checksums`] covers, in its order.
+fn checksum_names<const D: usize>(p: &mut Particles<D>) -> Vec<String> {
+    let mut names = vec![
+        "Config".to_string(),
+        "State".into(),
+        "/Particles/id".into(),
+        "/Particles/interactions".into(),
+    ];
+    names.extend(
+        p.named_arrays_mut()
+            .into_iter()
+            .map(|(n, _)| format!("/Particles/{n}")),
+    );
+    names
+}
+
+/// FNV-1a of the raw (little-endian) bytes of the texts and of every particle array, in
+/// the order of [`checksum_names`]: stored with each checkpoint, checked on reading.
+fn checksums<const D: usize>(text: &CheckpointText, p: &mut Particles<D>) -> Vec<u64> {
+    let mut out = vec![
+        fnv1a(FNV_OFFSET, text.config_toml.as_bytes()),
+        fnv1a(FNV_OFFSET, text.state_json.as_bytes()),
+        p.id.iter()
+            .fold(FNV_OFFSET, |h, v| fnv1a(h, &v.to_le_bytes())),
+        p.interactions
+            .iter()
+            .fold(FNV_OFFSET, |h, v| fnv1a(h, &v.to_le_bytes())),
+    ];
+    for (_, v) in p.named_arrays_mut() {
+        out.push(v.iter().fold(FNV_OFFSET, |h, x| fnv1a(h, &x.to_le_bytes())));
+    }
+    out
 }
 
 /// The checkpoints of a run, newest first.
@@ -156,6 +201,32 @@ pub fn read<const D: usize>(path: &Path) -> Result<(CheckpointText, Particles<D>
     if p.interactions.len() != n {
         bail!("{what}: /Particles/interactions has the wrong length");
     }
+    // Checkpoints written before checksums were stored have none to compare.
+    let attrs = f
+        .root()
+        .attrs()
+        .map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
+    match attrs.get("Checksums") {
+        None => {}
+        Some(AttrValue::U64Array(stored)) => {
+            let names = checksum_names(&mut p);
+            let found = checksums(&text, &mut p);
+            if stored.len() != found.len() {
+                bail!(
+                    "{what}: {} checksums stored for {} arrays (the file is corrupt)",
+                    stored.len(),
+                    found.len()
+                );
+            }
+            if let Some(k) = (0..found.len()).find(|&k| stored[k] != found[k]) {
+                bail!(
+                    "{what}: {} does not match its checksum (the file is corrupt)",
+                    names[k]
+                );
+            }
+        }
+        Some(_) => bail!("{what}: Checksums is not a list of 64-bit checksums"),
+    }
     Ok((text, p))
 }
 
@@ -219,6 +290,28 @@ mod tests {
             .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
             .collect();
         assert_eq!(names, ["ckpt_0000000020.hdf5", "ckpt_0000000015.hdf5"]);
+    }
+
+    #[test]
+    fn a_flipped_byte_in_an_array_fails_its_checksum_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut p = particles();
+        let path = write(dir.path(), 3, &text(), &mut p).unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        // The raw bytes of the masses, found in the file; one bit of one of them flipped.
+        let raw: Vec<u8> = p.mass[4..6].iter().flat_map(|m| m.to_le_bytes()).collect();
+        let at = bytes
+            .windows(raw.len())
+            .position(|w| w == raw.as_slice())
+            .expect("the masses are stored raw");
+        bytes[at + 3] ^= 0x10;
+        std::fs::write(&path, &bytes).unwrap();
+        let e = format!("{:#}", read::<2>(&path).err().unwrap());
+        assert!(
+            e.contains("/Particles/mass") && e.contains("checksum"),
+            "{e}"
+        );
+        assert!(e.contains("ckpt_0000000003.hdf5"), "{e}");
     }
 
     #[test]

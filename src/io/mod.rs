@@ -6,6 +6,7 @@ pub mod checkpoint;
 pub mod csv;
 pub mod hdf5;
 pub mod log;
+pub mod run_folder;
 pub mod snapshot;
 pub mod summary;
 pub mod timeseries;

@@ -40,7 +40,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let dx = a.length / n as f64;
     let shape = pulse(&a);
     let mut p = Particles::new();
-    for x in lattice::cuboid([0.0; D], [dx; D], [n; D]) {
+    for x in lattice::cuboid([0.0; D], [dx; D], [n; D])? {
         let m = shape.density(x, 0.0) * dx.powi(D as i32);
         let id = p.len() as u64;
         p.push(

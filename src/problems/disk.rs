@@ -302,6 +302,9 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let period = std::f64::consts::TAU / (g.gm / dp.r_in.powi(3)).sqrt();
     let h = smoothing_length(cfg, dr);
     if dp.balance {
+        // The balance evaluates SPH forces: h and the grid checked first.
+        crate::problems::check_particles(&p, h)?;
+        crate::limits::check_grid(cfg, &bx, h, &p.pos)?;
         balance_with_sph_forces(&mut p, &groups, cfg, &bx, h, dr);
     }
     Ok(InitialState {

@@ -89,17 +89,27 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         ProblemKind::Cv => cv::setup(cfg)?,
     };
     check_initial_state(&state)?;
+    crate::limits::check_grid(cfg, &state.bx, state.h, &state.particles.pos)?;
     Ok(state)
 }
 
 /// Refuses non-physical or misplaced particles, naming the first offender.
 pub fn check_initial_state<const D: usize>(s: &InitialState<D>) -> Result<()> {
-    let p = &s.particles;
-    if p.is_empty() {
+    if s.particles.is_empty() {
         bail!("the problem has no particles");
     }
-    if !(s.h > 0.0 && s.h.is_finite()) {
-        bail!("smoothing length h must be > 0, got {}", s.h);
+    check_particles(&s.particles, s.h)?;
+    s.bx.validate(crate::kernel::KERNEL_SUPPORT * s.h)?;
+    s.bx.check_inside(&s.particles.pos, &s.particles.id)?;
+    Ok(())
+}
+
+/// Refuses a non-physical smoothing length `h` or particle (mass or h not a positive
+/// number, internal energy negative or not finite, a position or velocity not finite, an
+/// id twice), naming the first offender; the box is not looked at.
+pub fn check_particles<const D: usize>(p: &Particles<D>, h: f64) -> Result<()> {
+    if !(h > 0.0 && h.is_finite()) {
+        bail!("smoothing length h must be > 0, got {h}");
     }
     for i in 0..p.len() {
         if !(p.mass[i] > 0.0 && p.mass[i].is_finite()) {
@@ -127,8 +137,6 @@ pub fn check_initial_state<const D: usize>(s: &InitialState<D>) -> Result<()> {
     if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
         bail!("particle id {} appears twice", w[0]);
     }
-    s.bx.validate(crate::kernel::KERNEL_SUPPORT * s.h)?;
-    s.bx.check_inside(&p.pos, &p.id)?;
     Ok(())
 }
 

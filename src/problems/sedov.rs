@@ -40,7 +40,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let m = s.rho0 * dx.powi(D as i32);
     let u0 = cfg.eos.internal_energy(s.rho0, s.p0);
     let mut p = Particles::new();
-    let pts = lattice::cuboid([-0.5 * s.length; D], [dx; D], [n; D]);
+    let pts = lattice::cuboid([-0.5 * s.length; D], [dx; D], [n; D])?;
     let weights: Vec<f64> = pts
         .iter()
         .map(|x| kernel.w(x.iter().map(|c| c * c).sum::<f64>().sqrt() / s.deposit_radius))

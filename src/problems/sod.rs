@@ -59,31 +59,44 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let n_cross_r = ((width / ideal).round() as usize).max(1);
     let dy_r = width / n_cross_r as f64;
     let dx_r = mass / (r.rho * dy_r.powi(D as i32 - 1));
-    let n_x_r = ((s.length - s.x0) / dx_r).round() as usize;
+    let n_x_r = right_count(s.x0, s.length, dx_r);
     if n_x_r == 0 {
         bail!("key `particles.n`: too few particles for the right state");
     }
     let mut p = Particles::new();
     let eos = cfg.eos;
-    let mut add_block =
-        |lo_x: f64, spacing: [f64; D], counts: [usize; D], st: crate::config::StateParams| {
-            let mut lo = [0.0; D];
-            lo[0] = lo_x;
-            for x in lattice::cuboid(lo, spacing, counts) {
-                let mut v = [0.0; D];
-                v[0] = st.v;
-                let id = p.len() as u64;
-                p.push(id, x, v, mass, eos.internal_energy(st.rho, st.p));
-            }
-        };
+    let mut add_block = |lo_x: f64,
+                         spacing: [f64; D],
+                         counts: [usize; D],
+                         st: crate::config::StateParams|
+     -> Result<()> {
+        let mut lo = [0.0; D];
+        lo[0] = lo_x;
+        for x in lattice::cuboid(lo, spacing, counts)? {
+            let mut v = [0.0; D];
+            v[0] = st.v;
+            let id = p.len() as u64;
+            p.push(id, x, v, mass, eos.internal_energy(st.rho, st.p));
+        }
+        Ok(())
+    };
     let mut counts_l = [n_cross_l; D];
     counts_l[0] = n;
     let mut counts_r = [n_cross_r; D];
     counts_r[0] = n_x_r;
     let mut sp_r = [dy_r; D];
     sp_r[0] = dx_r;
-    add_block(0.0, [dx; D], counts_l, l);
-    add_block(s.x0, sp_r, counts_r, r);
+    // Both blocks together within the bound, before either is built.
+    let both = crate::limits::lattice_count(counts_l)? as u64
+        + crate::limits::lattice_count(counts_r)? as u64;
+    if both > crate::limits::MAX_PARTICLES {
+        bail!(
+            "key `particles.n`: the tube would hold {both} particles, more than the {} a run can hold",
+            crate::limits::MAX_PARTICLES
+        );
+    }
+    add_block(0.0, [dx; D], counts_l, l)?;
+    add_block(s.x0, sp_r, counts_r, r)?;
 
     let mut max = [width; D];
     max[0] = s.length;
@@ -92,6 +105,18 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let bx = make_box(cfg, [0.0; D], max, kinds);
     let sparse = if l.rho < r.rho { dx } else { dx_r };
     Ok(InitialState::new(p, bx, smoothing_length(cfg, sparse)))
+}
+
+/// The right state's count of cells `dx` along x: those that fill `(x0, length)` best
+/// while the last cell-centred particle stays inside the tube (off the wall at `length`).
+fn right_count(x0: f64, length: f64, dx: f64) -> usize {
+    // `as usize` saturates; the bound keeps the count far from overflow.
+    let mut k = ((length - x0) / dx).round().clamp(0.0, 1e15) as usize;
+    // The last particle as `lattice::cuboid` places it.
+    while k > 0 && x0 + (k as f64 - 1.0 + 0.5) * dx >= length {
+        k -= 1;
+    }
+    k
 }
 
 /// L1 norms (volume-weighted) of ρ, v_x and p against the exact solution; for a
@@ -146,4 +171,62 @@ pub fn errors<const D: usize>(
         }
     }
     Ok(e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `problems/sod.toml` with `sets` and `particles.n = n`, set up in 1D (with every check of a
+    /// set-up: particles inside the box, the box against the kernel).
+    fn set_up(n: usize, sets: &[&str]) -> Result<InitialState<1>> {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/sod.toml");
+        let mut sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        sets.push(format!("particles.n={n}"));
+        let cfg = Config::load(&path, &sets)?;
+        crate::problems::setup::<1>(&cfg)
+    }
+
+    #[test]
+    fn every_resolution_from_1_to_1000_sets_up_inside_the_tube() {
+        // With h from `h_factor`, a coarse tube is refused only where the kernel does not
+        // fit the box (4h > 1, n < 24), by that message, or where the right state gets no
+        // particle (n ≤ 4), naming the key.
+        for n in 1..=1000 {
+            match set_up(n, &[]) {
+                Ok(_) => assert!(n >= 24, "n = {n}"),
+                Err(e) => {
+                    let e = format!("{e:#}");
+                    let kernel = e.contains("too small for the kernel");
+                    let few = n <= 4 && e.contains("particles.n");
+                    assert!(n < 24 && (kernel || few), "n = {n}: {e}");
+                }
+            }
+        }
+        // With a small fixed h every n sets up that gives the right state a particle.
+        for n in 1..=1000 {
+            match set_up(n, &["particles.h=0.001"]) {
+                Ok(_) => assert!(n > 4, "n = {n}"),
+                Err(e) => {
+                    let e = format!("{e:#}");
+                    assert!(n <= 4 && e.contains("particles.n"), "n = {n}: {e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_right_state_keeps_its_density_and_the_particles_their_mass() {
+        for n in [100, 101, 300, 800] {
+            let s = set_up(n, &[]).unwrap();
+            let p = &s.particles;
+            assert!(p.mass.iter().all(|&m| m == p.mass[0]), "n = {n}");
+            // Right of the diaphragm: particle spacing m / ρ_R, the sod.toml value 0.125.
+            let mut right: Vec<f64> = p.pos[0].iter().copied().filter(|&x| x > 0.5).collect();
+            right.sort_by(f64::total_cmp);
+            let spacing = right[1] - right[0];
+            assert!((p.mass[0] / spacing / 0.125 - 1.0).abs() < 1e-12, "n = {n}");
+            assert!(*right.last().unwrap() < 1.0, "n = {n}");
+        }
+    }
 }

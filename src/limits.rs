@@ -1,0 +1,158 @@
+//! Bounds on what a run may ask for, derived before anything is allocated: particles
+//! (indexed by 32-bit numbers in the neighbour grid), cells of the neighbour grid (from the
+//! box and h, in checked 64-bit arithmetic), snapshots per run, files per snapshot and
+//! worker threads. Each refusal is one line naming the key to change.
+
+use anyhow::{Result, bail};
+
+use crate::boundary::{BoundaryKind, SimBox};
+use crate::config::Config;
+
+/// Particles a run may hold: the neighbour grid numbers them with `u32`.
+pub const MAX_PARTICLES: u64 = u32::MAX as u64;
+/// Cells of the neighbour grid along x (its slabs, each with an entry of the sweep).
+pub const MAX_SLABS: u64 = 1 << 26;
+/// Cells of the whole neighbour grid (64-bit cell keys, with room to spare).
+pub const MAX_GRID_CELLS: u64 = 1 << 60;
+/// Snapshots one run may write.
+pub const MAX_SNAPSHOTS: u64 = 100_000;
+/// Files one snapshot may be split into.
+pub const MAX_FILES_PER_SNAPSHOT: usize = 4096;
+/// Worker threads per core.
+pub const MAX_THREADS_PER_CORE: usize = 16;
+
+/// The particles of a lattice of `counts` per axis (set from `particles.n`), or an error
+/// naming the key when there would be more than [`MAX_PARTICLES`].
+pub fn lattice_count<const D: usize>(counts: [usize; D]) -> Result<usize> {
+    let total = counts
+        .iter()
+        .try_fold(1u64, |a, &c| a.checked_mul(c as u64))
+        .filter(|&t| t <= MAX_PARTICLES);
+    match total {
+        Some(t) => Ok(t as usize),
+        None => {
+            let shape: Vec<String> = counts.iter().map(|c| c.to_string()).collect();
+            bail!(
+                "key `particles.n`: a lattice of {} particles is more than the {MAX_PARTICLES} a run can hold",
+                shape.join(" × ")
+            )
+        }
+    }
+}
+
+/// The key that sets h in `cfg`, for messages.
+fn h_key(cfg: &Config) -> &'static str {
+    if cfg.particles.h.is_some() {
+        "particles.h"
+    } else {
+        "particles.h_factor"
+    }
+}
+
+/// Refuses a neighbour grid (cells of the kernel support 2h over the box, on open axes over
+/// the particles' extent `pos`) with more than [`MAX_SLABS`] slabs or [`MAX_GRID_CELLS`]
+/// cells, naming the key that sets h.
+pub fn check_grid<const D: usize>(
+    cfg: &Config,
+    bx: &SimBox<D>,
+    h: f64,
+    pos: &[Vec<f64>; D],
+) -> Result<()> {
+    let support = crate::kernel::KERNEL_SUPPORT * h;
+    let mut total = Some(1u64);
+    let mut along = [0.0f64; D];
+    for d in 0..D {
+        let extent = if bx.kinds[d] == BoundaryKind::Open {
+            let (a, b) = pos[d]
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                });
+            if a.is_finite() { b - a } else { bx.length(d) }
+        } else {
+            bx.length(d)
+        };
+        // Cells along d as `Grid::new` makes them (one more on each side of a closed axis).
+        along[d] = (extent / support).floor() + 2.0;
+        let cells = if along[d] < 1.8e19 {
+            Some(along[d] as u64)
+        } else {
+            None
+        };
+        total = total.zip(cells).and_then(|(t, c)| t.checked_mul(c));
+    }
+    let too_many = !(along[0] <= MAX_SLABS as f64) || total.is_none_or(|t| t > MAX_GRID_CELLS);
+    if too_many {
+        let total = total.map_or_else(
+            || format!("{:.3e}", along.iter().product::<f64>()),
+            |t| t.to_string(),
+        );
+        bail!(
+            "key `{}`: h = {h:e} gives a neighbour grid of {total} cells ({:.0} along x) for this box, more than sphdisk allows ({MAX_GRID_CELLS} cells, {MAX_SLABS} along x): raise h or shrink the box",
+            h_key(cfg),
+            along[0]
+        );
+    }
+    Ok(())
+}
+
+/// Refuses more than [`MAX_SNAPSHOTS`] snapshots of `output.interval` up to `t_end`.
+pub fn check_snapshot_count(interval: f64, t_end: f64) -> Result<u64> {
+    let count = (t_end / interval * (1.0 + 1e-12)).floor();
+    if !(count <= MAX_SNAPSHOTS as f64) {
+        bail!(
+            "key `output.interval`: {interval:e} up to time.end = {t_end:e} gives {count:.3e} snapshots, more than the {MAX_SNAPSHOTS} a run may write: raise output.interval or lower time.end"
+        );
+    }
+    Ok(count as u64)
+}
+
+/// Refuses more than [`MAX_FILES_PER_SNAPSHOT`] files per snapshot.
+pub fn check_files_per_snapshot(files: usize) -> Result<()> {
+    if files > MAX_FILES_PER_SNAPSHOT {
+        bail!("key `output.files_per_snapshot`: at most {MAX_FILES_PER_SNAPSHOT}, got {files}");
+    }
+    Ok(())
+}
+
+/// Refuses more than [`MAX_THREADS_PER_CORE`] worker threads per core of `cores`.
+pub fn check_threads(threads: usize, cores: usize) -> Result<()> {
+    let max = MAX_THREADS_PER_CORE * cores.max(1);
+    if threads > max {
+        bail!(
+            "--threads: {threads} is more than {max} ({MAX_THREADS_PER_CORE} per core of the {cores} here)"
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lattice_counts_are_checked_before_they_overflow() {
+        assert_eq!(lattice_count([3, 4, 5]).unwrap(), 60);
+        for counts in [[2_097_153usize; 3], [usize::MAX, 2, 1], [65_536, 65_536, 1]] {
+            let e = lattice_count(counts).unwrap_err().to_string();
+            assert!(e.contains("particles.n"), "{e}");
+        }
+    }
+
+    #[test]
+    fn snapshot_counts_files_and_threads_are_bounded() {
+        assert_eq!(check_snapshot_count(0.05, 0.2).unwrap(), 4);
+        for (iv, end) in [(0.05, 1e308), (1e-300, 0.2), (f64::MIN_POSITIVE, 1.0)] {
+            let e = check_snapshot_count(iv, end).unwrap_err().to_string();
+            assert!(e.contains("output.interval"), "{e}");
+        }
+        check_files_per_snapshot(4).unwrap();
+        let e = check_files_per_snapshot(1_000_000_000)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("output.files_per_snapshot"), "{e}");
+        check_threads(32, 2).unwrap();
+        let e = check_threads(100_000, 2).unwrap_err().to_string();
+        assert!(e.contains("--threads") && e.contains("100000"), "{e}");
+    }
+}

@@ -1,0 +1,202 @@
+//! A resumed run checks what it reads: a newest checkpoint with a NaN position, a negative
+//! mass, a duplicate id, a time past the end, a state that does not parse or a flipped
+//! byte in an array is skipped with its cause named in `run.log`, and the run resumes from
+//! the older intact checkpoint, ending bit for bit where the uninterrupted run ends. With
+//! no intact checkpoint, one line names the newest and its cause.
+
+use std::path::Path;
+
+use sphdisk::io::checkpoint::{self, CheckpointText};
+use sphdisk::particles::Particles;
+
+mod common;
+use common::problem_file as problem;
+
+fn s(p: &Path) -> String {
+    p.to_string_lossy().into_owned()
+}
+
+fn sphdisk(args: &[&str]) -> (i32, String) {
+    let (code, _, err) = common::sphdisk_cli(None, args);
+    (code, err)
+}
+
+fn ok(args: &[&str]) {
+    let (code, err) = sphdisk(args);
+    assert_eq!(code, 0, "{args:?}: {err}");
+}
+
+const SETS: [&str; 6] = [
+    "--set",
+    "particles.n=16",
+    "--set",
+    "time.end=0.02",
+    "--set",
+    "output.checkpoint_steps=2",
+];
+
+/// The uninterrupted run into `a`, and the same stopped after step 4 into `b`, whose
+/// checkpoints are then those of steps 4 and 2.
+fn runs(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let p = problem("sedov2d.toml");
+    ok(&[&["run", &p, "--quiet", "--out", &s(&a)], &SETS[..]].concat());
+    ok(&[
+        &["run", &p, "--quiet", "--out", &s(&b), "--stop-after", "4"],
+        &SETS[..],
+    ]
+    .concat());
+    let names: Vec<String> = checkpoint::list(&b)
+        .unwrap()
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["ckpt_0000000004.hdf5", "ckpt_0000000002.hdf5"]);
+    (a, b)
+}
+
+fn copy_run(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to.join("checkpoints")).unwrap();
+    for sub in ["", "checkpoints"] {
+        for e in std::fs::read_dir(from.join(sub)).unwrap() {
+            let e = e.unwrap();
+            if e.path().is_file() {
+                std::fs::copy(e.path(), to.join(sub).join(e.file_name())).unwrap();
+            }
+        }
+    }
+}
+
+/// Rewrites the checkpoint of step 4 in `run` (with valid checksums) after `change`.
+fn rewrite(run: &Path, change: impl Fn(&mut CheckpointText, &mut Particles<2>)) {
+    let path = checkpoint::folder(run).join("ckpt_0000000004.hdf5");
+    let (mut text, mut p) = checkpoint::read::<2>(&path).unwrap();
+    change(&mut text, &mut p);
+    checkpoint::write(run, 4, &text, &mut p).unwrap();
+}
+
+/// The state's JSON with `key` set to `value`.
+fn with_state(text: &mut CheckpointText, key: &str, value: serde_json::Value) {
+    let mut v: serde_json::Value = serde_json::from_str(&text.state_json).unwrap();
+    v[key] = value;
+    text.state_json = v.to_string();
+}
+
+/// Flips one bit in the stored x coordinates of the checkpoint of step 4.
+fn flip_a_bit(run: &Path) {
+    let path = checkpoint::folder(run).join("ckpt_0000000004.hdf5");
+    let (_, p) = checkpoint::read::<2>(&path).unwrap();
+    let raw: Vec<u8> = p.pos[0][10..12]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let mut bytes = std::fs::read(&path).unwrap();
+    let at = bytes
+        .windows(raw.len())
+        .position(|w| w == raw.as_slice())
+        .expect("x is stored raw");
+    bytes[at + 2] ^= 0x01;
+    std::fs::write(&path, bytes).unwrap();
+}
+
+#[test]
+fn a_bad_newest_checkpoint_is_skipped_by_name_and_the_older_one_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = runs(dir.path());
+    type Damage = Box<dyn Fn(&Path)>;
+    let cases: Vec<(&str, Damage, &str)> = vec![
+        (
+            "nan_position",
+            Box::new(|r| rewrite(r, |_, p| p.pos[0][7] = f64::NAN)),
+            "non-finite position",
+        ),
+        (
+            "negative_mass",
+            Box::new(|r| rewrite(r, |_, p| p.mass[3] = -1e-3)),
+            "mass must be > 0",
+        ),
+        (
+            "duplicate_id",
+            Box::new(|r| {
+                rewrite(r, |_, p| {
+                    p.id[5] = p.id[6];
+                })
+            }),
+            "appears twice",
+        ),
+        (
+            "far_outside",
+            Box::new(|r| rewrite(r, |_, p| p.pos[1][2] = 1e6)),
+            "outside",
+        ),
+        (
+            "time_past_end",
+            Box::new(|r| rewrite(r, |t, _| with_state(t, "t", 5.0.into()))),
+            "outside [0, t_end",
+        ),
+        (
+            "zero_h",
+            Box::new(|r| rewrite(r, |t, _| with_state(t, "h", 0.0.into()))),
+            "smoothing length",
+        ),
+        (
+            "garbled_state",
+            Box::new(|r| rewrite(r, |t, _| t.state_json.insert_str(3, "}{"))),
+            "stored run state",
+        ),
+        (
+            "wrong_dimension_box",
+            Box::new(|r| {
+                rewrite(r, |t, _| {
+                    with_state(t, "box_min", serde_json::json!([0.0, 0.0, 0.0]))
+                })
+            }),
+            "not 2-dimensional",
+        ),
+        ("flipped_bit", Box::new(flip_a_bit), "/Particles/pos0"),
+    ];
+    for (name, damage, cause) in cases {
+        let run = dir.path().join(name);
+        copy_run(&b, &run);
+        damage(&run);
+        let (code, err) = sphdisk(&["run", "--quiet", "--resume", &s(&run)]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let log = std::fs::read_to_string(run.join("run.log")).unwrap();
+        let skip = log
+            .lines()
+            .find(|l| l.contains("skip checkpoint"))
+            .unwrap_or_else(|| panic!("{name}: nothing skipped: {log}"));
+        assert!(
+            skip.contains("ckpt_0000000004.hdf5") && skip.contains(cause),
+            "{name}: {skip}"
+        );
+        assert!(log.contains("resume from") && log.contains("ckpt_0000000002.hdf5"));
+        assert_eq!(
+            std::fs::read(a.join("final.csv")).unwrap(),
+            std::fs::read(run.join("final.csv")).unwrap(),
+            "{name}: the resumed run ends where the uninterrupted one does"
+        );
+    }
+}
+
+#[test]
+fn no_intact_checkpoint_is_one_line_naming_the_newest() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, b) = runs(dir.path());
+    flip_a_bit(&b);
+    let older = checkpoint::folder(&b).join("ckpt_0000000002.hdf5");
+    let (text, mut p) = checkpoint::read::<2>(&older).unwrap();
+    p.mass[0] = f64::NAN;
+    // Written as step 2 again: the newest two stay those of steps 4 and 2.
+    checkpoint::write(&b, 2, &text, &mut p).unwrap();
+    let (code, err) = sphdisk(&["run", "--quiet", "--resume", &s(&b)]);
+    assert_ne!(code, 0);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: ")
+            && err.contains("no usable checkpoint")
+            && err.contains("ckpt_0000000004.hdf5")
+            && err.contains("checksum"),
+        "{err}"
+    );
+}
