@@ -272,8 +272,14 @@ mod tests {
         let r: f64 = 0.31;
         let hz = 0.05 / (1.0 / 1.1 / r.powi(3)).sqrt();
         assert!(rms < hz && rms > 0.93 * hz, "rms {rms}, H {hz}");
+        // v_φ² = GM R²/(R² + z²)^{3/2} is the midplane's pull, not the circular speed at
+        // the distance √(R² + z²): the orbit through (R, 0, z) moving along y is at its
+        // apoastron with e = z²/(R² + z²) exactly.
         for i in 0..p.len() {
-            assert!(b.eccentricity(&p.position(i), &p.velocity(i)) < 1e-3);
+            let x = p.position(i);
+            let expect = x[2] * x[2] / (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+            let e = b.eccentricity(&x, &p.velocity(i));
+            assert!((e - expect).abs() < 1e-9, "e {e}, expected {expect}");
         }
     }
 
