@@ -616,15 +616,20 @@ impl SuperhumpReport {
             f.orbits.0,
             f.orbits.1
         );
+        let saturated = if g.eccentric {
+            format!(
+                ", saturated {:.4} (osculating {:.4}, m = 2 {:.4})",
+                g.e_saturated, g.e_osculating_saturated, g.m2_saturated
+            )
+        } else {
+            String::new()
+        };
         s += &format!(
-            "  eccentricity (m = 1): floor {:.4}, peak {:.4} at orbit {:.1}, saturated {:.4} (osculating {:.4}), at the end {:.4}, m = 2 {:.4}: {}\n",
+            "  eccentricity (m = 1): floor {:.4}, peak {:.4} at orbit {:.1}{saturated}, at the end {:.4}: {}\n",
             g.e_floor,
             g.e_peak,
             g.peak_orbit,
-            g.e_saturated,
-            g.e_osculating_saturated,
             g.e_end,
-            g.m2_saturated,
             if g.eccentric {
                 "eccentric"
             } else {
@@ -828,21 +833,22 @@ pub fn scan_csv(reports: &[(f64, &SuperhumpFigures)]) -> String {
     for (q, f) in reports {
         let p = f.precession.as_ref();
         s.push_str(&format!(
-            "{q},{},{:.6},{:.2},{:.6},{:.6},{},{},{},{},{},{},{},{},{},{:.6},{},{:.6},{:.6}\n",
+            "{q},{},{:.6},{:.2},{},{:.6},{},{},{},{},{},{},{},{},{},{:.6},{},{:.6},{:.6}\n",
             f.growth.eccentric,
             f.growth.e_peak,
             f.growth.peak_orbit,
-            f.growth.e_saturated,
+            o(f.growth.eccentric.then_some(f.growth.e_saturated)),
             f.growth.e_end,
             f.growth.faded,
             o(f.growth.onset_orbit),
             o(f.growth.e_folding_orbits),
             o(f.growth.r_disk_at_onset),
-            o(f.epsilon),
-            o(f.epsilon_err),
+            // The light curve's period of a disk that did not turn eccentric is no superhump.
+            o(f.epsilon.filter(|_| f.growth.eccentric)),
+            o(f.epsilon_err.filter(|_| f.growth.eccentric)),
             o(p.map(|p| p.epsilon_beat)),
             o(p.map(|p| p.epsilon_beat_err)),
-            o(f.amplitude_mag),
+            o(f.amplitude_mag.filter(|_| f.growth.eccentric)),
             roche::epsilon_dynamical_r31(*q),
             o(f.growth
                 .r_disk_at_onset
@@ -900,16 +906,16 @@ pub fn scan_panel(reports: &[(f64, &SuperhumpFigures)]) -> Panel {
             style: SeriesStyle::Dashed,
         },
         Series {
-            label: Some("runs: light curve".into()),
+            label: Some("runs: light curve (±1σ)".into()),
             points: runs,
             color: BLACK,
-            style: SeriesStyle::Dots,
+            style: SeriesStyle::Markers,
         },
         Series {
             label: Some("runs: beat of the precession".into()),
             points: beat,
             color: RED,
-            style: SeriesStyle::Dots,
+            style: SeriesStyle::Markers,
         },
     ];
     series.extend(bars);

@@ -30,6 +30,8 @@ pub enum SeriesStyle {
     Line,
     Dashed,
     Dots,
+    /// Few points that must be seen: filled circles of radius 5.
+    Markers,
 }
 
 /// One panel: axes, labels and its series.
@@ -223,6 +225,9 @@ pub fn plot_panels(path: &Path, size: (u32, u32), panels: &[Panel]) -> Result<()
                             .iter()
                             .map(|&p| Circle::new(p, 1, color.mix(0.35).filled())),
                     )
+                    .map_err(|e| err(&e))?,
+                SeriesStyle::Markers => chart
+                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 5, color.filled())))
                     .map_err(|e| err(&e))?,
             };
             if let Some(label) = &s.label {
