@@ -9,22 +9,9 @@ use std::time::{Duration, Instant};
 
 mod common;
 use common::problem_file as problem;
+use common::{ok, path_str as s, sphdisk_err as sphdisk};
 
 const LOCK: &str = ".sphdisk.lock";
-
-fn s(p: &Path) -> String {
-    p.to_string_lossy().into_owned()
-}
-
-fn sphdisk(args: &[&str]) -> (i32, String) {
-    let (code, _, err) = common::sphdisk_cli(None, args);
-    (code, err)
-}
-
-fn ok(args: &[&str]) {
-    let (code, err) = sphdisk(args);
-    assert_eq!(code, 0, "{args:?}: {err}");
-}
 
 /// Asserts a failure with one `error:` line holding every word of `expect`.
 fn fails(args: &[&str], expect: &[&str]) {

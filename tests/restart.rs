@@ -12,21 +12,7 @@ use sphdisk::io::hdf5::read_snapshot;
 
 mod common;
 use common::problem_file as problem;
-
-/// Runs `sphdisk` with `args`; returns (exit code, stderr).
-fn sphdisk(args: &[&str]) -> (i32, String) {
-    let (code, _, err) = common::sphdisk_cli(None, args);
-    (code, err)
-}
-
-fn ok(args: &[&str]) {
-    let (code, err) = sphdisk(args);
-    assert_eq!(code, 0, "{args:?} failed: {err}");
-}
-
-fn s(p: &Path) -> String {
-    p.to_string_lossy().into_owned()
-}
+use common::{ok, path_str as s, sphdisk_err as sphdisk};
 
 /// Every array of the newest checkpoint of a run, as bits: the complete state.
 fn final_state_bits<const D: usize>(run: &Path) -> Vec<(String, Vec<u64>)> {

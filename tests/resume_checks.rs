@@ -11,20 +11,7 @@ use sphdisk::particles::Particles;
 
 mod common;
 use common::problem_file as problem;
-
-fn s(p: &Path) -> String {
-    p.to_string_lossy().into_owned()
-}
-
-fn sphdisk(args: &[&str]) -> (i32, String) {
-    let (code, _, err) = common::sphdisk_cli(None, args);
-    (code, err)
-}
-
-fn ok(args: &[&str]) {
-    let (code, err) = sphdisk(args);
-    assert_eq!(code, 0, "{args:?}: {err}");
-}
+use common::{ok, path_str as s, sphdisk_err as sphdisk};
 
 const SETS: [&str; 6] = [
     "--set",

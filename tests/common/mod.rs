@@ -66,6 +66,26 @@ pub fn sphdisk_cli(dir: Option<&Path>, args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// A path as a command-line argument.
+#[allow(dead_code)]
+pub fn path_str(p: &Path) -> String {
+    p.to_string_lossy().into_owned()
+}
+
+/// Runs the `sphdisk` binary with `args`; returns (exit code, stderr).
+#[allow(dead_code)]
+pub fn sphdisk_err(args: &[&str]) -> (i32, String) {
+    let (code, _, err) = sphdisk_cli(None, args);
+    (code, err)
+}
+
+/// Runs the `sphdisk` binary with `args` and asserts that it succeeds.
+#[allow(dead_code)]
+pub fn ok(args: &[&str]) {
+    let (code, err) = sphdisk_err(args);
+    assert_eq!(code, 0, "{args:?}: {err}");
+}
+
 /// Every particle's state in `b` (from several ranks) equals the state in `a` (one rank), matched by id, to 1e-12 of
 /// each quantity's rms (the bar of issue 4): the same pairs are summed in another order,
 /// so the differences are round-off.
