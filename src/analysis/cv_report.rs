@@ -1001,26 +1001,10 @@ mod tests {
         e: f64,
         varpi: f64,
     ) -> Vec<([f64; 2], [f64; 2], f64, f64)> {
-        let gm = 1.0 - b.mu;
-        let p = a * (1.0 - e * e);
         (0..n)
             .map(|j| {
                 let m_anom = TAU * j as f64 / n as f64;
-                // Kepler's equation by Newton's method.
-                let mut ea = m_anom;
-                for _ in 0..50 {
-                    ea -= (ea - e * ea.sin() - m_anom) / (1.0 - e * ea.cos());
-                }
-                let f = 2.0
-                    * ((1.0 + e).sqrt() * (0.5 * ea).sin())
-                        .atan2((1.0 - e).sqrt() * (0.5 * ea).cos());
-                let r = p / (1.0 + e * f.cos());
-                let th = f + varpi;
-                let x = [r * th.cos(), r * th.sin()];
-                // Radial and tangential speeds of a Kepler orbit.
-                let vr = (gm / p).sqrt() * e * f.sin();
-                let vt = (gm / p).sqrt() * (1.0 + e * f.cos());
-                let u = [vr * th.cos() - vt * th.sin(), vr * th.sin() + vt * th.cos()];
+                let (x, u) = crate::analysis::kepler_point(1.0 - b.mu, a, e, varpi, m_anom);
                 (x, corotating(b, x, u), 1e-6, 0.0)
             })
             .collect()

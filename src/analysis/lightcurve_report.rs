@@ -177,56 +177,17 @@ pub fn read_lightcurve(path: &Path) -> Result<Vec<Row>> {
 
 /// [`read_lightcurve`] on the file's text; errors do not name the file.
 pub fn parse_lightcurve(text: &str) -> Result<Vec<Row>> {
-    let mut lines = text.lines().enumerate();
-    let header = match lines.next() {
-        Some((_, h)) => h.trim_start_matches('\u{feff}').trim(),
-        None => bail!("empty file; expected the header `{HEADER}`"),
-    };
-    if header != HEADER {
-        bail!("header is `{header}`, expected `{HEADER}`");
-    }
-    let names: Vec<&str> = HEADER.split(',').collect();
-    let unfinished_last = !text.ends_with('\n');
-    let total = text.lines().count();
-    let mut rows = Vec::new();
-    for (k, line) in lines {
-        let line = line.trim();
-        if line.is_empty() {
-            continue;
-        }
-        match parse_row(line, &names) {
-            Ok(row) => rows.push(row),
-            // A simulation still writing its light curve leaves half a line at the end.
-            Err(_) if unfinished_last && k + 1 == total => {}
-            Err(e) => bail!("line {}: {e}", k + 1),
-        }
-    }
-    Ok(rows)
-}
-
-fn parse_row(line: &str, names: &[&str]) -> Result<Row> {
-    let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-    if cells.len() != names.len() {
-        bail!("{} cells, expected {}", cells.len(), names.len());
-    }
-    let mut v = [0.0; 6];
-    for (i, (cell, name)) in cells.iter().zip(names).enumerate() {
-        let x: f64 = cell
-            .parse()
-            .map_err(|_| anyhow::anyhow!("column {name}: `{cell}` is not a number"))?;
-        if !x.is_finite() {
-            bail!("column {name}: {x} is not a finite number");
-        }
-        v[i] = x;
-    }
-    Ok(Row {
-        t: v[0],
-        orbit: v[1],
-        l_total: v[2],
-        l_disk: v[3],
-        l_stream: v[4],
-        l_spot: v[5],
-    })
+    Ok(crate::io::timeseries::parse_series(text, HEADER, false)?
+        .into_iter()
+        .map(|v| Row {
+            t: v[0],
+            orbit: v[1],
+            l_total: v[2],
+            l_disk: v[3],
+            l_stream: v[4],
+            l_spot: v[5],
+        })
+        .collect())
 }
 
 /// The rows as the run finally had them: wherever the time does not increase (a resumed

@@ -55,6 +55,26 @@ pub fn weighted_quantile(mut vm: Vec<(f64, f64)>, fraction: f64) -> Option<f64> 
     vm.last().map(|x| x.0)
 }
 
+/// A point of a Kepler ellipse in the plane about a mass `gm` at the origin: semi-major axis
+/// `a`, eccentricity `e` < 1, periastron at azimuth `varpi` (radians), mean anomaly `mean`.
+/// Returns the position and the inertial velocity.
+pub fn kepler_point(gm: f64, a: f64, e: f64, varpi: f64, mean: f64) -> ([f64; 2], [f64; 2]) {
+    // Kepler's equation E − e sin E = M by Newton's method.
+    let mut ecc = mean;
+    for _ in 0..50 {
+        ecc -= (ecc - e * ecc.sin() - mean) / (1.0 - e * ecc.cos());
+    }
+    let f =
+        2.0 * ((1.0 + e).sqrt() * (0.5 * ecc).sin()).atan2((1.0 - e).sqrt() * (0.5 * ecc).cos());
+    let semi_latus = a * (1.0 - e * e);
+    let r = semi_latus / (1.0 + e * f.cos());
+    let (s, c) = (f + varpi).sin_cos();
+    // Radial and tangential speeds of a Kepler orbit.
+    let vk = (gm / semi_latus).sqrt();
+    let (vr, vt) = (vk * e * f.sin(), vk * (1.0 + e * f.cos()));
+    ([r * c, r * s], [vr * c - vt * s, vr * s + vt * c])
+}
+
 /// Volume-weighted L1 norm ∫|e| dV / ∫dV with particle volumes m/ρ.
 pub fn l1_norm<const D: usize>(p: &Particles<D>, err: impl Fn(usize) -> f64) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);

@@ -93,50 +93,8 @@ pub struct ModesRow {
 /// writing) is ignored; rows whose time does not increase replace the earlier rows from
 /// that time on (a resumed run).
 pub fn parse_modes(text: &str) -> Result<Vec<ModesRow>> {
-    let mut lines = text.lines().enumerate();
-    let header = match lines.next() {
-        Some((_, h)) => h.trim_start_matches('\u{feff}').trim(),
-        None => bail!("empty file; expected the header `{HEADER}`"),
-    };
-    if header != HEADER {
-        bail!("header is `{header}`, expected `{HEADER}`");
-    }
-    let names: Vec<&str> = HEADER.split(',').collect();
-    let unfinished_last = !text.ends_with('\n');
-    let total = text.lines().count();
     let mut rows: Vec<ModesRow> = Vec::new();
-    for (k, line) in lines {
-        let line = line.trim();
-        if line.is_empty() {
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        let parsed: Result<Vec<f64>> = if cells.len() != names.len() {
-            Err(anyhow::anyhow!(
-                "{} cells, expected {}",
-                cells.len(),
-                names.len()
-            ))
-        } else {
-            cells
-                .iter()
-                .zip(&names)
-                .map(|(c, n)| {
-                    c.parse::<f64>()
-                        .ok()
-                        .filter(|x| !x.is_infinite())
-                        .ok_or_else(|| anyhow::anyhow!("column {n}: `{c}` is not a number"))
-                })
-                .collect()
-        };
-        let v = match parsed {
-            Ok(v) => v,
-            Err(_) if unfinished_last && k + 1 == total => continue,
-            Err(e) => bail!("line {}: {e}", k + 1),
-        };
-        if !v[0].is_finite() {
-            bail!("line {}: column t is not a finite number", k + 1);
-        }
+    for v in crate::io::timeseries::parse_series(text, HEADER, true)? {
         let row = ModesRow {
             t: v[0],
             r_disk: v[2],
@@ -203,6 +161,10 @@ pub struct Precession {
     /// Prograde turns of the periastron over the stretch.
     pub turns: f64,
     pub orbits: (f64, f64),
+    /// (orbit, unwrapped longitude of periastron in degrees) of the rows fitted, for the
+    /// picture.
+    #[serde(skip)]
+    pub points: Vec<(f64, f64)>,
 }
 
 /// The expected period excesses for the run's q.
@@ -436,6 +398,11 @@ pub fn precession(rows: &[ModesRow], from: f64, to: f64) -> Option<Precession> {
         epsilon_beat_err: rate_err * beat * beat,
         turns: (peri[peri.len() - 1] - peri[0]) / 360.0,
         orbits: (t[0] / TAU, t[t.len() - 1] / TAU),
+        points: t
+            .iter()
+            .map(|t| t / TAU)
+            .zip(peri.iter().copied())
+            .collect(),
     })
 }
 
@@ -563,7 +530,7 @@ pub fn analyse_superhump(run: &Path) -> Result<SuperhumpReport> {
     files.push(png);
     if let Some(p) = &f.precession {
         let png = run.join("superhump_precession.png");
-        plot_panels(&png, (1400, 600), &[precession_panel(&modes, p)])?;
+        plot_panels(&png, (1400, 600), &[precession_panel(p)])?;
         files.push(png);
     }
     if let Some(l) = &f.lightcurve {
@@ -774,22 +741,8 @@ fn eccentricity_panel(modes: &[ModesRow], f: &SuperhumpFigures) -> Panel {
     }
 }
 
-fn precession_panel(modes: &[ModesRow], p: &Precession) -> Panel {
-    let used: Vec<&ModesRow> = modes
-        .iter()
-        .filter(|r| (p.orbits.0..=p.orbits.1).contains(&(r.t / TAU)) && r.m1_phase_deg.is_finite())
-        .collect();
-    let peri = unwrap_deg(
-        &used
-            .iter()
-            .map(|r| (r.m1_phase_deg + 180.0 + r.t.to_degrees()).rem_euclid(360.0))
-            .collect::<Vec<_>>(),
-    );
-    let points: Vec<(f64, f64)> = used
-        .iter()
-        .zip(&peri)
-        .map(|(r, y)| (r.t / TAU, *y))
-        .collect();
+fn precession_panel(p: &Precession) -> Panel {
+    let points = p.points.clone();
     let (x0, y0) = points[0];
     let fit: Vec<(f64, f64)> = [p.orbits.0, p.orbits.1]
         .iter()

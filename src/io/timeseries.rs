@@ -63,6 +63,58 @@ impl Series {
     }
 }
 
+/// Parses the text of a series written by [`Series`]: the header must be `header`; each
+/// row has one number per column (`allow_nan`: NaN cells, for values a row may lack — but
+/// never in the first column, the time; never infinities). A last line without its newline that does not parse is a row a running
+/// simulation is still writing and is left out. Errors do not name the file.
+pub fn parse_series(text: &str, header: &str, allow_nan: bool) -> anyhow::Result<Vec<Vec<f64>>> {
+    let mut lines = text.lines().enumerate();
+    let first = match lines.next() {
+        Some((_, h)) => h.trim_start_matches('\u{feff}').trim(),
+        None => anyhow::bail!("empty file; expected the header `{header}`"),
+    };
+    if first != header {
+        anyhow::bail!("header is `{first}`, expected `{header}`");
+    }
+    let names: Vec<&str> = header.split(',').collect();
+    let unfinished_last = !text.ends_with('\n');
+    let total = text.lines().count();
+    let mut rows = Vec::new();
+    for (k, line) in lines {
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        match parse_row(line, &names, allow_nan) {
+            Ok(row) => rows.push(row),
+            Err(_) if unfinished_last && k + 1 == total => {}
+            Err(e) => anyhow::bail!("line {}: {e}", k + 1),
+        }
+    }
+    Ok(rows)
+}
+
+fn parse_row(line: &str, names: &[&str], allow_nan: bool) -> anyhow::Result<Vec<f64>> {
+    let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    if cells.len() != names.len() {
+        anyhow::bail!("{} cells, expected {}", cells.len(), names.len());
+    }
+    cells
+        .iter()
+        .zip(names)
+        .enumerate()
+        .map(|(i, (cell, name))| {
+            let x: f64 = cell
+                .parse()
+                .map_err(|_| anyhow::anyhow!("column {name}: `{cell}` is not a number"))?;
+            if x.is_infinite() || (x.is_nan() && !(allow_nan && i > 0)) {
+                anyhow::bail!("column {name}: {x} is not a finite number");
+            }
+            Ok(x)
+        })
+        .collect()
+}
+
 /// Header of `lightcurve.csv`.
 pub const LIGHTCURVE_HEADER: &str = "t,orbit,l_total,l_disk,l_stream,l_spot";
 /// Header of `modes.csv`: the disk's m = 1 and m = 2 modes and mean eccentricity in the

@@ -380,27 +380,15 @@ pub fn kepler_ring<const D: usize>(
 ) -> Particles<D> {
     let gm = 1.0 - b.mu;
     let mut p = Particles::new();
-    let semi_latus = a * (1.0 - e * e);
-    let vk = (gm / semi_latus).sqrt();
     for k in 0..n {
         let mean = std::f64::consts::TAU * (k as f64 + 0.5) / n as f64;
-        // Kepler's equation E − e sin E = M by Newton's method.
-        let mut ecc = mean;
-        for _ in 0..50 {
-            ecc -= (ecc - e * ecc.sin() - mean) / (1.0 - e * ecc.cos());
-        }
-        let f = 2.0
-            * ((1.0 + e).sqrt() * (0.5 * ecc).sin()).atan2((1.0 - e).sqrt() * (0.5 * ecc).cos());
-        let r = a * (1.0 - e * ecc.cos());
-        let phi = f + varpi;
-        let (s, c) = phi.sin_cos();
-        let (vr, vt) = (vk * e * f.sin(), vk * (1.0 + e * f.cos()));
+        let (xy, u) = crate::analysis::kepler_point(gm, a, e, varpi, mean);
         let mut x = [0.0; D];
         let mut v = [0.0; D];
-        x[0] = r * c;
-        x[1] = r * s;
-        v[0] = vr * c - vt * s + b.omega * x[1];
-        v[1] = vr * s + vt * c - b.omega * x[0];
+        x[..2].copy_from_slice(&xy);
+        // Turning frame: subtract Ω × x.
+        v[0] = u[0] + b.omega * x[1];
+        v[1] = u[1] - b.omega * x[0];
         p.push(k as u64, x, v, mass, 0.0);
     }
     p
