@@ -306,7 +306,7 @@ impl PairBlock {
             balsara: local.balsara[k],
             stress: local.stress[k],
         };
-        let (av, viscous) = (&phys.av, phys.viscosity.is_on());
+        let (av, viscous) = (&phys.av, phys.viscous());
         let m = &local.mass;
         self.scatter(
             work,
