@@ -18,5 +18,6 @@ pub mod physics;
 pub mod problems;
 pub mod render;
 pub mod rng;
+pub mod signals;
 pub mod simulation;
 pub mod sweep;

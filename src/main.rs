@@ -260,9 +260,13 @@ fn report_run(ended: &Ended, out: &std::path::Path) {
             step,
             time,
             checkpoint,
+            signal,
         } => {
+            let by = signal.map_or(String::new(), |s| {
+                format!(" by {}", sphdisk::signals::name(s))
+            });
             eprintln!(
-                "stopped after step {step} at t = {time}; checkpoint {}",
+                "stopped{by} after step {step} at t = {time}; checkpoint {}",
                 checkpoint.display()
             );
             eprintln!("  continue with: sphdisk run --resume {}", out.display());
@@ -361,9 +365,17 @@ fn real_main(cli: Cli) -> Result<()> {
                 }
                 (None, None) => anyhow::bail!("give a problem file or --resume RUN_FOLDER"),
             };
+            sphdisk::signals::install()?;
             let ended = execute(job)?;
             if !quiet {
                 report_run(&ended, &out);
+            }
+            if let Ended::Stopped {
+                signal: Some(sig), ..
+            } = ended
+            {
+                // 128 + the signal's number, as a shell reports a process the signal ended.
+                std::process::exit(128 + sig);
             }
             Ok(())
         }

@@ -71,11 +71,13 @@ pub enum Ended {
     Helped,
     /// Reached the end time: `summary.json` and `final.csv` are written.
     Finished(Box<Summary>),
-    /// Stopped at `--stop-after`: resume from `checkpoint`.
+    /// Stopped at `--stop-after`, or by a signal (`signals`): resume from `checkpoint`.
     Stopped {
         step: u64,
         time: f64,
         checkpoint: PathBuf,
+        /// The signal that asked for the stop (SIGTERM, SIGINT), if one did.
+        signal: Option<i32>,
     },
 }
 
@@ -879,14 +881,19 @@ fn advance<const D: usize>(
         }
         team.between_steps(&mut run.p, steps, &mut log)?;
         let snap_due = lands && run.st.next_snap < run.st.out_times.len();
-        let stop = opts.stop_after.is_some_and(|k| steps >= k) && t < t_end * (1.0 - 1e-12);
-        // Rank 0's clock decides, so that every rank agrees.
-        let mut wall_due = [(last_ckpt.elapsed().as_secs_f64() >= ckpt_wall) as u8 as f64];
+        // Rank 0's clock decides, so that every rank agrees; a signal on any rank stops all.
+        let mut due = [
+            (last_ckpt.elapsed().as_secs_f64() >= ckpt_wall) as u8 as f64,
+            crate::signals::requested().unwrap_or(0) as f64,
+        ];
         if team.ranks() > 1 {
-            wall_due[0] = if root { wall_due[0] } else { 0.0 };
-            team.max(&mut wall_due);
+            due[0] = if root { due[0] } else { 0.0 };
+            team.max(&mut due);
         }
-        let ckpt_due = snap_due || ckpt_steps.is_some_and(|k| steps % k == 0) || wall_due[0] > 0.0;
+        let signal = (due[1] > 0.0).then_some(due[1] as i32);
+        let stop = (opts.stop_after.is_some_and(|k| steps >= k) || signal.is_some())
+            && t < t_end * (1.0 - 1e-12);
+        let ckpt_due = snap_due || ckpt_steps.is_some_and(|k| steps % k == 0) || due[0] > 0.0;
         let mut all = if snap_due || ckpt_due || stop {
             team.gather(&run.p)
         } else {
@@ -906,12 +913,19 @@ fn advance<const D: usize>(
             last_ckpt = Instant::now();
             if stop {
                 bar.finish_and_clear();
-                log.line(&format!("stopped after step {steps} at t = {t}"));
+                log.line(&match signal {
+                    Some(sig) => format!(
+                        "stopped by {} after step {steps} at t = {t}",
+                        crate::signals::name(sig)
+                    ),
+                    None => format!("stopped after step {steps} at t = {t}"),
+                });
                 return Ok(Outcome {
                     ended: Ended::Stopped {
                         step: steps,
                         time: t,
                         checkpoint: path,
+                        signal,
                     },
                     particles: run.p,
                 });

@@ -1,0 +1,45 @@
+//! Stop requests from outside: SIGTERM (what a batch scheduler sends at the wall-time limit)
+//! and SIGINT (Ctrl-C) ask a run to finish its step, write a checkpoint and exit with
+//! status 128 + the signal's number (143, 130); a second one of either ends the process at
+//! once. On N ranks the request of any rank stops all of them at the same step.
+
+use std::sync::Arc;
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+use signal_hook::consts::{SIGINT, SIGTERM};
+
+static REQUESTED: OnceLock<Arc<AtomicUsize>> = OnceLock::new();
+
+fn requested_flag() -> &'static Arc<AtomicUsize> {
+    REQUESTED.get_or_init(|| Arc::new(AtomicUsize::new(0)))
+}
+
+/// Routes SIGTERM and SIGINT to a stop request (for `sphdisk run`).
+pub fn install() -> anyhow::Result<()> {
+    let seen = Arc::new(AtomicBool::new(false));
+    for sig in [SIGTERM, SIGINT] {
+        // The second signal finds `seen` set and ends the process with 128 + sig.
+        signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, Arc::clone(&seen))?;
+        signal_hook::flag::register(sig, Arc::clone(&seen))?;
+        signal_hook::flag::register_usize(sig, Arc::clone(requested_flag()), sig as usize)?;
+    }
+    Ok(())
+}
+
+/// The signal that asked the run to stop, if one did.
+pub fn requested() -> Option<i32> {
+    match requested_flag().load(Ordering::Relaxed) {
+        0 => None,
+        s => Some(s as i32),
+    }
+}
+
+/// The signal's name for messages.
+pub fn name(sig: i32) -> &'static str {
+    match sig {
+        SIGTERM => "SIGTERM",
+        SIGINT => "SIGINT",
+        _ => "a signal",
+    }
+}
