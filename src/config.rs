@@ -820,4 +820,26 @@ mod tests {
         assert_eq!(f.get("particles.n").map(String::as_str), Some("100"));
         assert_eq!(f.get("eos.gamma").map(String::as_str), Some("1.4"));
     }
+
+    #[test]
+    fn outbursts_replace_viscosity_and_cooling() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/outbursts.toml");
+        let text = std::fs::read_to_string(path).unwrap();
+        assert!(load(&text, &[]).is_ok());
+        let e = load(&text, &["viscosity.alpha=0.1"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("[outbursts]") && e.contains("viscosity.alpha"),
+            "{e}"
+        );
+        let e = load(&text, &["cooling.beta=1", "cooling.cs0=0.05"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("[outbursts]") && e.contains("[cooling]"), "{e}");
+        let e = load(&text, &["outbursts.sigma_min=1"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("outbursts.sigma_min"), "{e}");
+    }
 }
