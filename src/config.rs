@@ -38,6 +38,10 @@ pub struct Config {
     /// β cooling of the internal energy towards a sound-speed profile (needs an ideal gas
     /// and a central mass): `beta`, `cs0`, `r0`, `q`.
     pub cooling: Option<crate::physics::cooling::Cooling>,
+    /// The dwarf-nova disk instability (needs an ideal gas and a central mass, replaces
+    /// `[viscosity]` and `[cooling]`): `alpha_cold`, `alpha_hot`, `cs_cold`, `cs_hot`,
+    /// `sigma_max`, `sigma_min`, `r0`, `slope`, `beta` (`physics::outbursts`).
+    pub outbursts: Option<crate::physics::outbursts::Outbursts>,
     /// A disk already in place about a cv problem's accretor: `r_in`, `r_out`, `spacing`
     /// (`problems::cv_disk`).
     pub initial_disk: Option<crate::problems::cv_disk::InitialDisk>,
@@ -603,6 +607,24 @@ impl Config {
         if let Some(c) = &self.cooling {
             c.validate(&self.eos, self.gravity.is_some() || self.binary.is_some())
                 .map_err(|e| anyhow::anyhow!(e))?;
+        }
+        if let Some(o) = &self.outbursts {
+            o.validate(
+                &self.eos,
+                self.gravity.is_some() || self.binary.is_some(),
+                self.problem.dimension,
+            )
+            .map_err(|e| anyhow::anyhow!(e))?;
+            if self.viscosity.is_on() {
+                bail!(
+                    "table `[outbursts]`: it sets α by the gas's branch; remove viscosity.alpha / viscosity.nu"
+                );
+            }
+            if self.cooling.is_some() {
+                bail!(
+                    "table `[outbursts]`: it relaxes u to the branch's temperature itself; remove [cooling]"
+                );
+            }
         }
         if self.problem.kind == ProblemKind::Cv && self.binary.is_none() {
             bail!("table `[binary]`: missing (problem.kind = \"cv\" needs q or the stars' masses)");

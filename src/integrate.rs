@@ -49,11 +49,15 @@ pub fn rhs<const D: usize>(
     stats
 }
 
-/// What acts on each particle from outside the sweep: the external gravity, and cooling.
+/// What acts on each particle from outside the sweep: the external gravity, and cooling or
+/// the disk instability's relaxation of u to its branch.
 pub fn add_external<const D: usize>(p: &mut Particles<D>, phys: &Physics<D>) {
     add_gravity(p, phys);
     if let (Some(c), Some(g)) = (&phys.cooling, &phys.gravity) {
         c.add_to(p, &phys.eos, g);
+    }
+    if let (Some(o), Some(g)) = (&phys.outbursts, &phys.gravity) {
+        o.set_rates(p, &phys.eos, g);
     }
 }
 

@@ -191,6 +191,13 @@ enum AnalyseCommand {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Dwarf-nova outbursts of a run with [outbursts]: each outburst's start, duration and
+    /// peak (mag above quiescence), superoutbursts (the disk eccentric) with their superhump,
+    /// the recurrence in orbits and days (outbursts.json, outbursts.png in the run folder).
+    Outbursts {
+        /// The run's output folder (a cv run: lightcurve.csv, monitor.csv, modes.csv).
+        run: PathBuf,
+    },
     /// A cataclysmic variable: the disk's radii and eccentricity, the bright spot's azimuth
     /// and, in 3D, the stream's overflow at each snapshot (cv_evolution.csv, cv.json).
     Cv {
@@ -452,6 +459,16 @@ fn real_main(cli: Cli) -> Result<()> {
                 for f in sh::write_scan(&out, &with_q)? {
                     println!("wrote {}", f.display());
                 }
+            }
+            Ok(())
+        }
+        Command::Analyse {
+            what: AnalyseCommand::Outbursts { run },
+        } => {
+            let report = sphdisk::analysis::outburst_report::analyse_outbursts(&run)?;
+            print!("{}", report.summary());
+            for f in &report.files {
+                println!("wrote {}", f.display());
             }
             Ok(())
         }

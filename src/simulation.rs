@@ -880,7 +880,16 @@ fn advance<const D: usize>(
                 .output
                 .lightcurve_interval
                 .unwrap_or(std::f64::consts::TAU / 50.0);
-            write_series(mt, &run.p, &mut run.st, support, every, team, &mut series)?;
+            write_series(
+                mt,
+                &run.phys,
+                &run.p,
+                &mut run.st,
+                support,
+                every,
+                team,
+                &mut series,
+            )?;
         }
         team.between_steps(&mut run.p, steps, &mut log)?;
         let snap_due = lands && run.st.next_snap < run.st.out_times.len();
@@ -1011,8 +1020,10 @@ fn inject_stream<const D: usize>(
 
 /// A row of `lightcurve.csv`, `monitor.csv` and `modes.csv` (collective: sums over ranks; rank 0
 /// writes), and the time of the next.
+#[allow(clippy::too_many_arguments)]
 fn write_series<const D: usize>(
     mt: &MassTransfer,
+    phys: &Physics<D>,
     p: &Particles<D>,
     st: &mut LoopState,
     support: f64,
@@ -1026,7 +1037,8 @@ fn write_series<const D: usize>(
     let r_disk = problems::cv::histogram_radius(&hist, 0.9);
     let disk_mass: f64 = hist.iter().sum();
     let l = problems::cv::luminosities(b, p, r_disk, support);
-    let mut v = vec![l[0], l[1], l[2], p.len() as f64, p.mass.iter().sum()];
+    let hot = phys.outbursts.map_or(0.0, |o| o.hot_mass(p, &phys.eos).0);
+    let mut v = vec![l[0], l[1], l[2], p.len() as f64, p.mass.iter().sum(), hot];
     team.sum(&mut v);
     let orbit = st.t / std::f64::consts::TAU;
     series[0].row(&[st.t, orbit, v[0] + v[1] + v[2], v[0], v[1], v[2]])?;
@@ -1042,6 +1054,7 @@ fn write_series<const D: usize>(
         f.accreted.mass,
         f.returned.mass,
         f.escaped.mass,
+        v[5],
     ])?;
     let (w_lo, w_hi) = crate::analysis::cv_report::ECCENTRICITY_WINDOW;
     let mut sums = problems::cv::mode_sums(b, p, w_lo * r_disk, w_hi * r_disk);

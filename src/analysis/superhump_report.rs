@@ -204,7 +204,7 @@ pub struct SuperhumpFigures {
 }
 
 /// Running mean of `y` over ±`half` in `t` (both sorted by t; NaN values skipped).
-fn running_mean(t: &[f64], y: &[f64], half: f64) -> Vec<f64> {
+pub(crate) fn running_mean(t: &[f64], y: &[f64], half: f64) -> Vec<f64> {
     let (mut lo, mut hi) = (0, 0);
     let (mut sum, mut n) = (0.0, 0usize);
     let mut out = Vec::with_capacity(t.len());

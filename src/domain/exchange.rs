@@ -735,6 +735,7 @@ mod tests {
             gravity: None,
             binary: None,
             cooling: None,
+            outbursts: None,
         }
     }
 

@@ -123,16 +123,23 @@ impl Drop for FolderLock {
 }
 
 /// Whether process `pid` runs (on Linux from /proc; elsewhere every pid counts as running,
-/// so a stale lock there is removed by hand).
+/// so a stale lock there is removed by hand). A killed run whose parent has not yet reaped
+/// it (a zombie, state `Z` in /proc/PID/stat) no longer runs.
 fn process_alive(pid: u32) -> bool {
     if pid == std::process::id() {
         return true;
     }
     let proc = Path::new("/proc");
-    if proc.join("self").exists() {
-        proc.join(pid.to_string()).exists()
-    } else {
-        true
+    if !proc.join("self").exists() {
+        return true;
+    }
+    match std::fs::read_to_string(proc.join(pid.to_string()).join("stat")) {
+        // "PID (COMM) STATE …": the state follows the last ')' (COMM may hold one).
+        Ok(stat) => stat
+            .rsplit_once(')')
+            .and_then(|(_, rest)| rest.split_whitespace().next())
+            .is_none_or(|state| state != "Z" && state != "X"),
+        Err(_) => proc.join(pid.to_string()).exists(),
     }
 }
 
@@ -285,6 +292,32 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join(LOCK_FILE), pid.to_string()).unwrap();
         let _lock = FolderLock::acquire(dir.path()).unwrap();
+        let text = std::fs::read_to_string(dir.path().join(LOCK_FILE)).unwrap();
+        assert_eq!(text, std::process::id().to_string());
+    }
+
+    #[test]
+    fn the_lock_of_a_killed_but_unreaped_run_is_taken_over() {
+        // A child that has exited but is not waited for stays a zombie with its /proc
+        // entry: a run killed while its parent (a shell, a batch system) has not yet reaped
+        // it. Its lock must not block the next run.
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let pid = child.id();
+        let stat = format!("/proc/{pid}/stat");
+        let t0 = std::time::Instant::now();
+        while !std::fs::read_to_string(&stat)
+            .unwrap_or_default()
+            .rsplit_once(')')
+            .is_some_and(|(_, r)| r.trim_start().starts_with('Z'))
+        {
+            assert!(t0.elapsed().as_secs() < 10, "child never exited");
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join(LOCK_FILE), pid.to_string()).unwrap();
+        let lock = FolderLock::acquire(dir.path());
+        child.wait().unwrap();
+        let _lock = lock.unwrap();
         let text = std::fs::read_to_string(dir.path().join(LOCK_FILE)).unwrap();
         assert_eq!(text, std::process::id().to_string());
     }

@@ -121,6 +121,7 @@ pub const LIGHTCURVE_HEADER: &str = "t,orbit,l_total,l_disk,l_stream,l_spot";
 /// window [0.5, 1.0) R90 (`problems::cv::DiskModes`), the longitude of periastron in the
 /// turning frame and in the inertial frame (whose slope is the precession rate).
 pub const MODES_HEADER: &str = "t,orbit,r_disk,window_mass,m1,m1_phase_deg,m2,m2_phase_deg,e,periastron_deg,periastron_inertial_deg";
-/// Header of `monitor.csv`.
+/// Header of `monitor.csv`; `hot_mass` is the mass on the hot branch of `[outbursts]` (0
+/// without it).
 pub const MONITOR_HEADER: &str =
-    "t,orbit,particles,mass,disk_mass,r_disk,injected,accreted,returned,escaped";
+    "t,orbit,particles,mass,disk_mass,r_disk,injected,accreted,returned,escaped,hot_mass";

@@ -10,4 +10,5 @@ pub mod gravity;
 pub mod hydro;
 pub mod l1_stream;
 pub mod mass_transfer;
+pub mod outbursts;
 pub mod viscosity;

@@ -44,6 +44,8 @@ pub struct Physics<const D: usize> {
     pub binary: Option<Binary>,
     /// β cooling of the internal energy (applied outside the sweep, with the gravity).
     pub cooling: Option<crate::physics::cooling::Cooling>,
+    /// The dwarf-nova disk instability: α by the gas's branch, u relaxed to the branch.
+    pub outbursts: Option<crate::physics::outbursts::Outbursts>,
 }
 
 impl<const D: usize> Physics<D> {
@@ -65,6 +67,7 @@ impl<const D: usize> Physics<D> {
             gravity: cfg.central_mass(),
             binary: cfg.binary.as_ref().map(Binary::new),
             cooling: cfg.cooling,
+            outbursts: cfg.outbursts,
         }
     }
 
@@ -78,6 +81,24 @@ impl<const D: usize> Physics<D> {
             gravity: None,
             binary: None,
             cooling: None,
+            outbursts: None,
+        }
+    }
+
+    /// Whether the physical shear viscosity (Eqs. 8–10) acts.
+    #[inline]
+    pub fn viscous(&self) -> bool {
+        self.viscosity.is_on() || self.outbursts.is_some()
+    }
+
+    /// ν at an element with sound speed `cs` at cylindrical radius `r`: the two-branch α of
+    /// `[outbursts]`, or the `[viscosity]` model.
+    #[inline]
+    pub fn nu(&self, cs: f64, r: f64) -> f64 {
+        let gm = self.gravity.map_or(0.0, |g| g.gm);
+        match &self.outbursts {
+            Some(o) => o.nu(cs, r, gm),
+            None => self.viscosity.nu(cs, r, gm),
         }
     }
 }
@@ -456,11 +477,8 @@ fn finish_slab<const D: usize>(
                 if phys.av.balsara {
                     local.balsara[k] = balsara_factor(&local.vgrad[k], local.cs[k], h);
                 }
-                if phys.viscosity.is_on() {
-                    let gm = phys.gravity.map_or(0.0, |g| g.gm);
-                    let nu =
-                        phys.viscosity
-                            .nu(local.cs[k], cylindrical_radius(&local.position(k)), gm);
+                if phys.viscous() {
+                    let nu = phys.nu(local.cs[k], cylindrical_radius(&local.position(k)));
                     local.nu[k] = nu;
                     local.stress[k] = phys.viscosity.stress(&local.vgrad[k], nu);
                 }

@@ -309,7 +309,7 @@ impl PairBlock {
             stress: local.stress[k],
             u: if conduct { local.u[k] } else { 0.0 },
         };
-        let (av, viscous) = (&phys.av, phys.viscosity.is_on());
+        let (av, viscous) = (&phys.av, phys.viscous());
         let m = &local.mass;
         self.scatter(
             work,

@@ -115,14 +115,11 @@ pub fn full_list_minimum_image<const D: usize>(
             *b = balsara_factor(&v, parts.cs[i], phys.kernel.h());
         }
     }
-    let gm = phys.gravity.map_or(0.0, |g| g.gm);
     let stress: Vec<[[f64; D]; D]> = (0..n)
         .map(|k| {
             let v: [[f64; D]; D] =
                 std::array::from_fn(|a| std::array::from_fn(|c| parts.vgrad[a][c][k]));
-            let nu = phys
-                .viscosity
-                .nu(parts.cs[k], cylindrical_radius(&parts.position(k)), gm);
+            let nu = phys.nu(parts.cs[k], cylindrical_radius(&parts.position(k)));
             phys.viscosity.stress(&v, nu)
         })
         .collect();
@@ -149,7 +146,7 @@ pub fn full_list_minimum_image<const D: usize>(
             &side(parts, i),
             &side(parts, j),
             &phys.av,
-            phys.viscosity.is_on(),
+            phys.viscous(),
         );
         let (mi, mj) = (parts.mass[i], parts.mass[j]);
         for d in 0..D {
