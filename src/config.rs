@@ -117,6 +117,10 @@ pub struct ParticlesSection {
     pub h_factor: Option<f64>,
     /// Smoothing length in code units (overrides `h_factor`).
     pub h: Option<f64>,
+    /// The smoothing kernel: "cubic" (the paper's, default), "quintic", "wendland_c2",
+    /// "wendland_c4", "wendland_c6".
+    #[serde(default)]
+    pub kernel: crate::kernel::KernelKind,
     #[serde(default = "default_seed")]
     pub seed: u64,
 }
@@ -245,6 +249,9 @@ pub struct SodParams {
     pub length: f64,
     /// Cross-section side in 2D/3D (rounded to whole lattice spacings).
     pub width: f64,
+    /// The x-range [lo, hi] the error norms cover (default the whole tube): where waves
+    /// from the walls, which the exact solution does not know, have not arrived.
+    pub window: Option<[f64; 2]>,
 }
 
 impl Default for SodParams {
@@ -263,6 +270,7 @@ impl Default for SodParams {
             x0: 0.5,
             length: 1.0,
             width: 0.1,
+            window: None,
         }
     }
 }
@@ -299,8 +307,9 @@ impl Default for AdvectionParams {
 #[serde(deny_unknown_fields, default)]
 pub struct SedovParams {
     pub energy: f64,
-    /// Radius of the region that receives the energy, in kernel supports (2h); the energy
-    /// is spread with kernel-shaped weights W(r · 2h / radius).
+    /// Radius of the region that receives the energy, in box units (default 0.1, the same
+    /// at every resolution); the energy is spread with the weights of a cubic spline whose
+    /// support is this radius.
     pub deposit_radius: f64,
     pub rho0: f64,
     pub p0: f64,
@@ -312,7 +321,7 @@ impl Default for SedovParams {
     fn default() -> Self {
         Self {
             energy: 1.0,
-            deposit_radius: 1.0,
+            deposit_radius: 0.1,
             rho0: 1.0,
             p0: 1e-6,
             length: 1.0,

@@ -49,7 +49,7 @@ fn h_key(cfg: &Config) -> &'static str {
     }
 }
 
-/// Refuses a neighbour grid (cells of the kernel support 2h over the box, on open axes over
+/// Refuses a neighbour grid (cells of the kernel support over the box, on open axes over
 /// the particles' extent `pos`) with more than [`MAX_SLABS`] slabs or [`MAX_GRID_CELLS`]
 /// cells, naming the key that sets h.
 pub fn check_grid<const D: usize>(
@@ -58,7 +58,7 @@ pub fn check_grid<const D: usize>(
     h: f64,
     pos: &[Vec<f64>; D],
 ) -> Result<()> {
-    let support = crate::kernel::KERNEL_SUPPORT * h;
+    let support = cfg.particles.kernel.support_factor() * h;
     let mut total = Some(1u64);
     let mut along = [0.0f64; D];
     for d in 0..D {

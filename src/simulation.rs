@@ -27,7 +27,6 @@ use crate::io::summary::{
     peak_rss_bytes,
 };
 use crate::io::timeseries::{LIGHTCURVE_HEADER, MODES_HEADER, MONITOR_HEADER, Series};
-use crate::kernel::KERNEL_NAME;
 use crate::particles::Particles;
 use crate::physics::l1_stream::InjectorState;
 use crate::physics::mass_transfer::MassTransfer;
@@ -206,7 +205,7 @@ fn load_checkpoint<const D: usize>(path: &Path, overrides: &[String]) -> Result<
             bail!("no particles");
         }
         problems::check_particles(&p, st.h)?;
-        bx.validate(crate::kernel::KERNEL_SUPPORT * st.h)?;
+        bx.validate(cfg.particles.kernel.support_factor() * st.h)?;
         bx.check_inside_closed(&p.pos, &p.id)?;
         crate::limits::check_grid(&cfg, &bx, st.h, &p.pos)
     })()
@@ -360,6 +359,10 @@ struct LoopState {
     /// Time of the next row of the binary's time series.
     #[serde(default)]
     next_series: f64,
+    /// Largest share of the internal energy held by particles without a neighbour, over
+    /// the steps (a Sedov blast's trapped core).
+    #[serde(default)]
+    max_isolated_energy_fraction: f64,
 }
 
 impl LoopState {
@@ -646,7 +649,7 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
                 .to_particles::<D>()
                 .with_context(|| format!("--from {}", path.display()))?;
             let state = InitialState::new(p, bx, h);
-            problems::check_initial_state(&state)
+            problems::check_initial_state(&state, cfg.particles.kernel)
                 .and_then(|_| crate::limits::check_grid(cfg, &bx, h, &state.particles.pos))
                 .with_context(|| format!("--from {}", path.display()))?;
             if let Some(inj) = &mut injector {
@@ -689,6 +692,7 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
         injector,
         budget: MassBudget::default(),
         next_series: 0.0,
+        max_isolated_energy_fraction: 0.0,
     };
     let mut run = Run::new(cfg.clone(), particles, st, bx);
     let mut stats = rhs(&mut run.p, &run.bx, &run.phys, run.window);
@@ -795,10 +799,16 @@ fn advance<const D: usize>(
         let s = kdk_step_with(&mut run.p, &bx, &phys, dt, |p| {
             team.evaluate(p, &bx, &phys, window)
         });
+        let own = &run.p;
+        let isolated: f64 = (0..own.len())
+            .filter(|&i| own.interactions[i] == 0)
+            .map(|i| own.mass[i] * own.u[i])
+            .sum();
         let mut sums = [
             s.pairs as f64,
             s.ghosts as f64,
-            run.p.interactions.iter().map(|&k| k as f64).sum::<f64>(),
+            own.interactions.iter().map(|&k| k as f64).sum::<f64>(),
+            isolated,
         ];
         team.sum(&mut sums);
         let mut maxes = [
@@ -819,6 +829,10 @@ fn advance<const D: usize>(
         st.ghosts = sums[1] as usize;
         st.interactions_sum += sums[2] as u64;
         let now = global_totals(team, &run.p, gravity);
+        if now.internal > 0.0 {
+            st.max_isolated_energy_fraction =
+                st.max_isolated_energy_fraction.max(sums[3] / now.internal);
+        }
         let (_, dp, _) = now.drift_from(&st.prev.to_totals::<D>());
         st.max_dp_step = st.max_dp_step.max(dp);
         st.prev = TotalsRecord::from(&now);
@@ -1105,8 +1119,24 @@ fn finish<const D: usize>(
     with_accreted.mass += st.budget.mass_out();
     let (dm, dp, de) = with_accreted.drift_from(&totals_start);
     let l0 = totals_start.angular_momentum;
-    let dl = (with_accreted.angular_momentum - l0).abs() / l0.abs().max(f64::MIN_POSITIVE);
-    let errors = problems::errors(cfg, p, &run.bx, st.h, st.t)?;
+    // Relative to |L_z| at the start, or where that is 0 (a blast from rest) to the largest
+    // |L_z| the particles could hold now, Σ m |x||v| in the plane.
+    let l_scale = if l0 != 0.0 {
+        l0.abs()
+    } else {
+        (0..p.len())
+            .map(|i| {
+                let r = (0..D.min(2)).map(|d| p.pos[d][i].powi(2)).sum::<f64>();
+                let v = (0..D.min(2)).map(|d| p.vel[d][i].powi(2)).sum::<f64>();
+                p.mass[i] * (r * v).sqrt()
+            })
+            .sum()
+    };
+    let dl = (with_accreted.angular_momentum - l0).abs() / l_scale.max(f64::MIN_POSITIVE);
+    let mut errors = problems::errors(cfg, p, &run.bx, st.h, st.t)?;
+    if let Some(f) = errors.get_mut("isolated_energy_fraction") {
+        *f = f.max(st.max_isolated_energy_fraction);
+    }
     let n = p.len();
     let ring = match cfg.problem.kind {
         crate::config::ProblemKind::Ring => Some(problems::ring::record(cfg)?),
@@ -1130,11 +1160,11 @@ fn finish<const D: usize>(
             momentum: dp,
             energy: run.evolve_u.then_some(de),
             momentum_max_per_step: st.max_dp_step,
-            angular_momentum: (D >= 2 && l0 != 0.0).then_some(dl),
+            angular_momentum: (D >= 2 && l_scale > 0.0).then_some(dl),
         },
         errors,
         smoothing_length: st.h,
-        kernel: KERNEL_NAME.to_string(),
+        kernel: cfg.particles.kernel.description().to_string(),
         mean_neighbours: st.interactions_sum as f64 / (st.evaluations as f64 * n as f64),
         ghosts: st.ghosts,
         peak_window_bytes: st.peak_bytes,

@@ -104,6 +104,42 @@ fn negative_or_zero_mass_is_refused() {
 }
 
 #[test]
+fn unknown_kernel_shock_tube_window_sedov_deposit_and_conductivity_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    let sod = problem("sod.toml");
+    assert_fails(
+        d.path(),
+        &["check", &sod, "--set", "particles.kernel=\"gauss\""],
+        &["particles", "kernel", "gauss"],
+    );
+    assert_fails(
+        d.path(),
+        &["check", &sod, "--set", "sod.window=[0.8, 0.2]"],
+        &["sod.window"],
+    );
+    assert_fails(
+        d.path(),
+        &[
+            "check",
+            &sod,
+            "--set",
+            "artificial_viscosity.conductivity=-1",
+        ],
+        &["artificial_viscosity.conductivity"],
+    );
+    assert_fails(
+        d.path(),
+        &[
+            "check",
+            &problem("sedov2d.toml"),
+            "--set",
+            "sedov.deposit_radius=0.7",
+        ],
+        &["sedov.deposit_radius"],
+    );
+}
+
+#[test]
 fn zero_or_negative_smoothing_length_is_refused() {
     let d = tempfile::tempdir().unwrap();
     let p = problem("sod.toml");

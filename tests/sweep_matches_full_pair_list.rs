@@ -3,7 +3,7 @@
 //! straightforward full-pair-list evaluation (minimum-image distances, no ghosts) to round-off.
 
 use sphdisk::boundary::{BoundaryKind, SimBox};
-use sphdisk::kernel::Kernel;
+use sphdisk::kernel::{Kernel, KernelKind};
 use sphdisk::particles::Particles;
 use sphdisk::physics::artificial_viscosity::ArtificialViscosity;
 use sphdisk::physics::eos::Eos;
@@ -40,7 +40,10 @@ fn unit_box<const D: usize>(kinds: [BoundaryKind; D]) -> SimBox<D> {
 }
 
 fn check_pairs<const D: usize>(p: &Particles<D>, bx: &SimBox<D>, h: f64) {
-    let k = Kernel::<D>::new(h);
+    check_pairs_with(p, bx, Kernel::<D>::new(h));
+}
+
+fn check_pairs_with<const D: usize>(p: &Particles<D>, bx: &SimBox<D>, k: Kernel<D>) {
     let local = Local::build(p, bx, k.support());
     let mut found = all_pairs(&local, &k);
     let mut brute = brute_force_pairs(&local, k.support());
@@ -99,9 +102,13 @@ fn rel_max_diff(a: &[f64], b: &[f64]) -> f64 {
         / scale
 }
 
-fn check_sums<const D: usize>(mut p: Particles<D>, bx: &SimBox<D>, h: f64) {
+fn check_sums<const D: usize>(p: Particles<D>, bx: &SimBox<D>, h: f64) {
+    check_sums_with(p, bx, Kernel::<D>::new(h));
+}
+
+fn check_sums_with<const D: usize>(mut p: Particles<D>, bx: &SimBox<D>, kernel: Kernel<D>) {
     let phys = Physics::hydro(
-        Kernel::<D>::new(h),
+        kernel,
         Eos::Ideal { gamma: 5.0 / 3.0 },
         ArtificialViscosity {
             alpha: 1.0,
@@ -158,6 +165,48 @@ fn three_sums_equal_full_pair_list_periodic_and_open() {
             &unit_box([Open, Periodic, Periodic]),
             0.06,
         );
+    }
+}
+
+/// Every kernel: the grid and the ghosts take its support (3h for the quintic spline), so
+/// the sweep still finds exactly the brute-force pairs and the full pair list's sums.
+#[test]
+fn every_kernel_finds_the_same_pairs_and_sums() {
+    use BoundaryKind::*;
+    for kind in KernelKind::ALL {
+        let k1 = Kernel::<1>::of_kind(kind, 0.02);
+        let k2 = Kernel::<2>::of_kind(kind, 0.04);
+        let k3 = Kernel::<3>::of_kind(kind, 0.05);
+        for (seed, clustered) in [(5, false), (6, true)] {
+            for bk in [Periodic, Reflecting, Open] {
+                check_pairs_with(&random_set::<1>(300, clustered, seed), &unit_box([bk]), k1);
+                check_pairs_with(
+                    &random_set::<2>(600, clustered, seed),
+                    &unit_box([bk; 2]),
+                    k2,
+                );
+                check_pairs_with(
+                    &random_set::<3>(1200, clustered, seed),
+                    &unit_box([bk; 3]),
+                    k3,
+                );
+            }
+            check_sums_with(
+                random_set::<1>(300, clustered, seed),
+                &unit_box([Periodic]),
+                k1,
+            );
+            check_sums_with(
+                random_set::<2>(700, clustered, seed),
+                &unit_box([Periodic; 2]),
+                k2,
+            );
+            check_sums_with(
+                random_set::<3>(1200, clustered, seed),
+                &unit_box([Open, Periodic, Periodic]),
+                k3,
+            );
+        }
     }
 }
 

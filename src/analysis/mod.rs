@@ -212,6 +212,38 @@ pub fn crossing_from_right(profile: &[(f64, f64)], threshold: f64, x_max: f64) -
     Some(x0 + (v0 - threshold) / (v0 - v1) * (x1 - x0))
 }
 
+/// Where a profile jumps from `left` (towards smaller x) to `right` (towards larger x),
+/// searched only within `[lo, hi]`: the crossings of the mid-value (left + right)/2 that go
+/// from left's side to right's side between neighbouring bins, linearly interpolated; of
+/// several, the one nearest `near`. Works for either ordering of the two values, so that
+/// a window holding just one discontinuity of the exact solution measures that one.
+pub fn jump_position(
+    profile: &[(f64, f64)],
+    lo: f64,
+    hi: f64,
+    left: f64,
+    right: f64,
+    near: f64,
+) -> Option<f64> {
+    let mid = 0.5 * (left + right);
+    let sign = if right > left { 1.0 } else { -1.0 };
+    // Signed so that the left side is negative and the right side non-negative.
+    let side = |v: f64| sign * (v - mid);
+    let inside: Vec<(f64, f64)> = profile
+        .iter()
+        .copied()
+        .filter(|&(x, _)| x >= lo && x <= hi)
+        .collect();
+    inside
+        .windows(2)
+        .filter(|w| side(w[0].1) < 0.0 && side(w[1].1) >= 0.0)
+        .map(|w| {
+            let ((x0, v0), (x1, v1)) = (w[0], w[1]);
+            x0 + (mid - v0) / (v1 - v0) * (x1 - x0)
+        })
+        .min_by(|a, b| (a - near).abs().total_cmp(&(b - near).abs()))
+}
+
 /// Scanning from the left, the bin where the profile peaks (the first maximum), refined by
 /// a parabola through it and its neighbours.
 pub fn peak_position(profile: &[(f64, f64)]) -> Option<(f64, f64)> {
@@ -240,6 +272,20 @@ mod tests {
         let x = crossing_from_right(&prof, 0.6, f64::INFINITY).unwrap();
         assert!((x - 1.5).abs() < 1e-12);
         assert_eq!(crossing_from_right(&prof, 5.0, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn jump_position_takes_the_crossing_in_the_window_in_either_direction() {
+        // Rising then falling: 1 | 3 | 2 with jumps at 1.5 and 3.5.
+        let prof: Vec<(f64, f64)> = (0..6)
+            .map(|i| (i as f64, [1.0, 1.0, 3.0, 3.0, 2.0, 2.0][i]))
+            .collect();
+        let up = jump_position(&prof, 0.0, 2.5, 1.0, 3.0, 1.5).unwrap();
+        assert!((up - 1.5).abs() < 1e-12, "{up}");
+        let down = jump_position(&prof, 2.5, 5.0, 3.0, 2.0, 3.5).unwrap();
+        assert!((down - 3.5).abs() < 1e-12, "{down}");
+        // The falling jump is not found where the profile only rises.
+        assert_eq!(jump_position(&prof, 0.0, 2.5, 3.0, 1.0, 1.5), None);
     }
 
     #[test]

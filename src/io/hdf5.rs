@@ -22,7 +22,7 @@ use hdf5_pure::{AttrValue, File, FileBuilder, GroupBuilder};
 
 use crate::io::atomic::write_atomic;
 use crate::io::snapshot::{PointMassRecord, Snapshot};
-use crate::kernel::KERNEL_NAME;
+use crate::kernel::KernelKind;
 
 /// Number of particle types in SWIFT's header arrays.
 const N_TYPES: usize = 7;
@@ -244,13 +244,23 @@ fn encode_part(
 
     let mut hydro = fb.create_group("HydroScheme");
     hydro.set_attr("Scheme", AttrValue::AsciiString("sphdisk SPH".into()));
+    // The run's kernel, from its problem file (the cubic spline where it names none).
+    let kernel = meta
+        .parameters
+        .get("particles.kernel")
+        .and_then(|v| KernelKind::from_key(v.trim_matches('"')))
+        .unwrap_or_default();
     hydro.set_attr(
         "Kernel function",
-        AttrValue::AsciiString(KERNEL_NAME.into()),
+        AttrValue::AsciiString(kernel.description().into()),
     );
     hydro.set_attr(
         "Smoothing length convention",
-        AttrValue::AsciiString("constant h; kernel support radius 2h (cubic spline)".into()),
+        AttrValue::AsciiString(format!(
+            "constant h; kernel support radius {}h ({})",
+            kernel.support_factor(),
+            kernel.key()
+        )),
     );
     hydro.set_attr("Kernel target N_ngb", AttrValue::F64Array(vec![0.0]));
     hydro.set_attr(

@@ -239,7 +239,8 @@ pub struct Conservation {
     pub energy: Option<f64>,
     /// Largest single-step momentum drift |ΔP| / Σ m|v|.
     pub momentum_max_per_step: f64,
-    /// |ΔL_z| / |L_z| (2D and 3D, when L_z ≠ 0). SPH's shear viscosity conserves it only
+    /// |ΔL_z| / |L_z| (2D and 3D); where L_z starts at 0 (a blast from rest), |ΔL_z| over
+    /// Σ m |x||v| in the plane at the end. SPH's shear viscosity conserves it only
     /// approximately.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angular_momentum: Option<f64>,

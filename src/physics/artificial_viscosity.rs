@@ -1,6 +1,7 @@
 //! Artificial viscosity for shocks: Monaghan's (1997) signal-velocity form, with an optional
 //! Balsara (1995) switch, and optionally acting on the velocity relative to circular orbits
 //! about the central mass (for disks). Off (α = β = 0) by default; shock problems turn it on.
+//! Also the artificial conductivity of the energy equation (Price 2008), off by default.
 
 use serde::{Deserialize, Serialize};
 
@@ -28,6 +29,12 @@ pub struct ArtificialViscosity {
     /// and angular momentum are conserved as before; the pair's heating ½ Π_ij v_ij·∇_i W_ij
     /// uses the true velocities, so total energy is conserved exactly too.
     pub orbital: bool,
+    /// Artificial conductivity α_u (Price 2008): du_i/dt += Σ_j m_j α_u v_sig,u (u_i − u_j)
+    /// r̂_ij·∇_i W_ij / ρ̄_ij with v_sig,u = √(|p_i − p_j| / ρ̄_ij), which smooths u where the
+    /// pressure jumps (shocks) but not across a contact in pressure balance, where it
+    /// removes the pressure blip. 0 (off) by default; ignored for gas without an energy
+    /// equation.
+    pub conductivity: f64,
 }
 
 impl Default for ArtificialViscosity {
@@ -37,6 +44,7 @@ impl Default for ArtificialViscosity {
             beta: 0.0,
             balsara: false,
             orbital: false,
+            conductivity: 0.0,
         }
     }
 }
@@ -49,6 +57,7 @@ impl ArtificialViscosity {
             beta: 2.0,
             balsara: false,
             orbital: false,
+            conductivity: 0.0,
         }
     }
 
@@ -63,6 +72,12 @@ impl ArtificialViscosity {
             return Err(format!(
                 "artificial_viscosity.beta must be ≥ 0, got {}",
                 self.beta
+            ));
+        }
+        if !(self.conductivity >= 0.0 && self.conductivity.is_finite()) {
+            return Err(format!(
+                "artificial_viscosity.conductivity must be ≥ 0, got {}",
+                self.conductivity
             ));
         }
         Ok(())

@@ -43,6 +43,8 @@ pub struct ForceSide<const D: usize> {
     pub balsara: f64,
     /// Viscous stress S = ν σ (Eq. 9, plus bulk part); zero without physical viscosity.
     pub stress: [[f64; D]; D],
+    /// Specific internal energy (for the artificial conductivity).
+    pub u: f64,
 }
 
 /// One pair's contribution to the right-hand sides, independent of the partners' masses:
@@ -53,7 +55,9 @@ pub struct ForceSide<const D: usize> {
 #[derive(Clone, Copy, Debug)]
 pub struct PairForce<const D: usize> {
     pub accel: [f64; D],
-    /// p_i/(ρ_i ρ_j) v_ij·∇_i W_ij: particle i's share of the pressure work.
+    /// p_i/(ρ_i ρ_j) v_ij·∇_i W_ij: particle i's share of the pressure work, plus the heat
+    /// conducted to i (artificial conductivity; −m_i/m_j times j's share, so it adds no
+    /// energy).
     pub work_i: f64,
     /// p_j/(ρ_i ρ_j) v_ij·∇_i W_ij.
     pub work_j: f64,
@@ -78,6 +82,11 @@ pub struct PairForce<const D: usize> {
 /// viscous work of the pair given to each partner with its own stress:
 /// du_i/dt += −Σ_j m_j (S_i/ρ_j) : (v_ij ⊗ ∇_i W_ij) ≈ ν_i σ_i : V_i = ½ ν_i σ_i:σ_i ≥ 0,
 /// which conserves total energy exactly (Riffert et al. 1995).
+///
+/// With α_u = `av.conductivity` > 0, Price's (2008) artificial conductivity:
+/// du_i/dt += Σ_j m_j α_u v_sig,u (u_i − u_j) f r / ρ̄_ij (r̂_ij·∇_i W_ij = f r), with
+/// v_sig,u = √(|p_i − p_j| / ρ̄_ij), ρ̄_ij = (ρ_i + ρ_j)/2; j gets the opposite, so the pair
+/// exchanges heat without changing the total energy.
 #[inline]
 pub fn force_pair<const D: usize>(
     dx: &[f64; D],
@@ -115,6 +124,13 @@ pub fn force_pair<const D: usize>(
         heat_j: heat_av,
         vsig,
     };
+    if av.conductivity > 0.0 {
+        let rho_mean = 0.5 * (i.rho + j.rho);
+        let vsig_u = ((i.p - j.p).abs() / rho_mean).sqrt();
+        let cond = av.conductivity * vsig_u * (i.u - j.u) * f * r / rho_mean;
+        out.work_i += cond;
+        out.work_j -= cond;
+    }
     if viscous {
         let g: [f64; D] = std::array::from_fn(|d| f * dx[d]);
         let (inv_i, inv_j) = (1.0 / i.rho, 1.0 / j.rho);
@@ -149,6 +165,7 @@ mod tests {
             cs: 1.0,
             balsara: 1.0,
             stress,
+            u: 1.5 * p / rho,
         }
     }
 
@@ -161,7 +178,8 @@ mod tests {
         let (mi, mj) = (1.3, 0.7);
         let a = side([1.0, -0.5], 1.1, 2.0, [[0.3, -0.2], [-0.2, -0.3]]);
         let b = side([-0.3, 0.4], 0.8, 1.5, [[-0.1, 0.5], [0.5, 0.1]]);
-        let av = ArtificialViscosity::for_shocks();
+        let mut av = ArtificialViscosity::for_shocks();
+        av.conductivity = 1.0;
         for viscous in [false, true] {
             let pf = force_pair(&dx, r, k.f(r), &a, &b, &av, viscous);
             // dE/dt = m_i v_i·a_i + m_j v_j·a_j + m_i du_i + m_j du_j = 0.
@@ -174,5 +192,37 @@ mod tests {
         }
         let pf = force_pair(&dx, r, k.f(r), &a, &b, &av, false);
         assert!(pf.heat_i > 0.0, "approaching pair must heat");
+    }
+
+    #[test]
+    fn conductivity_moves_heat_from_hot_to_cold_and_only_where_pressure_differs() {
+        let k = Kernel::<2>::new(0.5);
+        let (dx, r) = ([0.3, 0.0], 0.3);
+        let cond = ArtificialViscosity {
+            conductivity: 1.0,
+            ..ArtificialViscosity::default()
+        };
+        let off = ArtificialViscosity::default();
+        // At rest: no pressure work, only the conducted heat.
+        let (hot, cold) = (
+            side([0.0; 2], 1.0, 2.0, [[0.0; 2]; 2]),
+            side([0.0; 2], 1.0, 1.0, [[0.0; 2]; 2]),
+        );
+        let pf = force_pair(&dx, r, k.f(r), &hot, &cold, &cond, false);
+        assert!(
+            pf.work_i < 0.0 && pf.work_j > 0.0,
+            "{} {}",
+            pf.work_i,
+            pf.work_j
+        );
+        // m_i du_i + m_j du_j = m_i m_j (work_i + work_j) = 0.
+        assert_eq!(pf.work_i + pf.work_j, 0.0);
+        let none = force_pair(&dx, r, k.f(r), &hot, &cold, &off, false);
+        assert_eq!((none.work_i, none.work_j), (0.0, 0.0));
+        // A contact in pressure balance: u differs, p does not, nothing flows.
+        let mut dense = side([0.0; 2], 8.0, 1.0, [[0.0; 2]; 2]);
+        dense.u = 1.5 / 8.0;
+        let pf = force_pair(&dx, r, k.f(r), &cold, &dense, &cond, false);
+        assert_eq!((pf.work_i, pf.work_j), (0.0, 0.0));
     }
 }

@@ -88,18 +88,21 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         ProblemKind::File => file::setup(cfg)?,
         ProblemKind::Cv => cv::setup(cfg)?,
     };
-    check_initial_state(&state)?;
+    check_initial_state(&state, cfg.particles.kernel)?;
     crate::limits::check_grid(cfg, &state.bx, state.h, &state.particles.pos)?;
     Ok(state)
 }
 
 /// Refuses non-physical or misplaced particles, naming the first offender.
-pub fn check_initial_state<const D: usize>(s: &InitialState<D>) -> Result<()> {
+pub fn check_initial_state<const D: usize>(
+    s: &InitialState<D>,
+    kernel: crate::kernel::KernelKind,
+) -> Result<()> {
     if s.particles.is_empty() {
         bail!("the problem has no particles");
     }
     check_particles(&s.particles, s.h)?;
-    s.bx.validate(crate::kernel::KERNEL_SUPPORT * s.h)?;
+    s.bx.validate(kernel.support_factor() * s.h)?;
     s.bx.check_inside(&s.particles.pos, &s.particles.id)?;
     Ok(())
 }

@@ -52,9 +52,17 @@ impl<const D: usize> Physics<D> {
     /// Everything a problem file switches on, with smoothing length `h`.
     pub fn from_config(cfg: &crate::config::Config, h: f64) -> Self {
         Self {
-            kernel: Kernel::<D>::new(h),
+            kernel: Kernel::<D>::of_kind(cfg.particles.kernel, h),
             eos: cfg.eos,
-            av: cfg.artificial_viscosity,
+            av: ArtificialViscosity {
+                // Without an energy equation there is no heat to conduct.
+                conductivity: if cfg.eos.evolves_energy() {
+                    cfg.artificial_viscosity.conductivity
+                } else {
+                    0.0
+                },
+                ..cfg.artificial_viscosity
+            },
             viscosity: cfg.viscosity,
             gravity: cfg.central_mass(),
             binary: cfg.binary.as_ref().map(Binary::new),

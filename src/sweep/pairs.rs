@@ -293,6 +293,8 @@ impl PairBlock {
 
     /// Third sum: accelerations (Eq. 7 + viscosity) and du/dt.
     pub fn force<const D: usize>(&self, local: &Local<D>, phys: &Physics<D>, work: &mut [Work<D>]) {
+        // u only where the conductivity reads it: one random load fewer per partner.
+        let conduct = phys.av.conductivity > 0.0;
         let side = |k: usize| ForceSide {
             v: local.velocity(k),
             v_av: local
@@ -305,6 +307,7 @@ impl PairBlock {
             cs: local.cs[k],
             balsara: local.balsara[k],
             stress: local.stress[k],
+            u: if conduct { local.u[k] } else { 0.0 },
         };
         let (av, viscous) = (&phys.av, phys.viscous());
         let m = &local.mass;

@@ -136,6 +136,7 @@ pub fn full_list_minimum_image<const D: usize>(
         cs: parts.cs[k],
         balsara: balsara[k],
         stress: stress[k],
+        u: parts.u[k],
     };
     for &(i, j, dx, r) in &list {
         let pf = force_pair(
