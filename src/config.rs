@@ -179,6 +179,9 @@ fn default_max_steps() -> u64 {
     10_000_000
 }
 
+/// Default of `output.statistics_steps`.
+pub const DEFAULT_STATISTICS_STEPS: u64 = 10;
+
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSection {
@@ -191,6 +194,9 @@ pub struct OutputSection {
     pub checkpoint_steps: Option<u64>,
     /// Wall-clock seconds between checkpoints; default 600. The last two are kept.
     pub checkpoint_wall_seconds: Option<f64>,
+    /// Steps between rows of `statistics.csv` (global totals); default
+    /// [`DEFAULT_STATISTICS_STEPS`]. Rows are also written at step 0 and at the end.
+    pub statistics_steps: Option<u64>,
     /// Time between rows of a binary's `lightcurve.csv` and `monitor.csv`; default
     /// P_orb / 50 = 2π/50.
     pub lightcurve_interval: Option<f64>,
@@ -532,6 +538,9 @@ impl Config {
         }
         if self.output.checkpoint_steps == Some(0) {
             bail!("key `output.checkpoint_steps`: must be ≥ 1, got 0");
+        }
+        if self.output.statistics_steps == Some(0) {
+            bail!("key `output.statistics_steps`: must be ≥ 1, got 0");
         }
         if let Some(w) = self.output.checkpoint_wall_seconds {
             positive("output.checkpoint_wall_seconds", w)?;
