@@ -10,6 +10,7 @@
    swiftsimio open whole, and sphdisk reads back (render).
 3. swiftsimio (SWIFT's own reader) loads a 3D and a 2D snapshot with units: every
    particle, the stored masses and densities, the header's time and dimension.
+4. With physical units ([units]), `Temperatures` in K: swiftsimio and yt read them.
 
 Usage: scripts/check_snapshots.py [path/to/sphdisk]   (default target/release/sphdisk)
 """
@@ -133,4 +134,33 @@ with tempfile.TemporaryDirectory() as tmp:
         assert abs(float(data.metadata.time.value) - t) <= 1e-12 * max(t, 1.0)
         print(f"swiftsimio {swiftsimio.__version__}: {dim}D, {n} particles, "
               f"density in {gas.densities.units}, t = {t}")
+    # 4. Temperatures in K where the problem file gives physical units: swiftsimio reads them
+    #    in K and they are μ m_p P/(ρ k_B) of the stored P and ρ; yt's gas temperature is
+    #    the same field. Without [units] there are none (G = 1 units have no kelvin).
+    run("sedov.toml", tmp / "u", "particles.n=12", "time.end=0.01", "output.interval=0.01",
+        "units.mass_cgs=2e33", "units.length_cgs=1.5e13", "units.time_cgs=3.15e7",
+        "units.mean_molecular_weight=1.3")
+    usnap = tmp / "u" / "snap_0001.hdf5"
+    with h5py.File(usnap, "r") as f:
+        g = f["PartType0"]
+        p_cgs = g["Pressures"][:] * g["Pressures"].attrs[
+            "Conversion factor to CGS (not including cosmological corrections)"][0]
+        rho_cgs = g["Densities"][:] * g["Densities"].attrs[
+            "Conversion factor to CGS (not including cosmological corrections)"][0]
+        t_file = g["Temperatures"][:]
+    m_p, k_b = 1.67262192369e-24, 1.380649e-16
+    t_expect = 1.3 * m_p * p_cgs / (rho_cgs * k_b)
+    # The same product in another order: round-off.
+    assert np.allclose(t_file, t_expect, rtol=1e-12, atol=0), "Temperatures"
+    data = swiftsimio.load(str(usnap))
+    temps = data.gas.temperatures
+    assert str(temps.units) == "K", temps.units
+    assert np.array_equal(np.asarray(temps.to("K")), t_file)
+    ds = yt.load(str(usnap))
+    # yt's SWIFT front end knows the units of a few fields only: the values, unitless.
+    t_yt = np.sort(np.asarray(ds.all_data()["gas", "temperature"]))
+    assert np.array_equal(t_yt, np.sort(t_file)), "yt's gas temperature"
+    with h5py.File(snap, "r") as f:
+        assert "Temperatures" not in f["PartType0"], "no kelvin without [units]"
+    print(f"Temperatures: {t_file.min():.4g}..{t_file.max():.4g} K (swiftsimio, yt)")
 print("snapshot checks passed")

@@ -497,9 +497,14 @@ impl Config {
     /// The code units in cgs: `[units]`, or those a binary in physical values defines,
     /// or 1.
     pub fn units(&self) -> crate::io::hdf5::Units {
+        self.physical_units().unwrap_or_default()
+    }
+
+    /// The physical units of `[units]`, or a binary's from its masses and period; none
+    /// when the code units are only G = 1 units (then the cgs factors are 1).
+    pub fn physical_units(&self) -> Option<crate::io::hdf5::Units> {
         self.units
             .or_else(|| self.binary.as_ref().and_then(|b| b.physical_units()))
-            .unwrap_or_default()
     }
 
     pub fn dimension(&self) -> usize {

@@ -407,6 +407,7 @@ impl<const D: usize> Run<D> {
             parameters: cfg.flattened(),
             units: cfg.units(),
             periodic: bx.kinds.iter().all(|k| *k == BoundaryKind::Periodic),
+            physical: cfg.physical_units().is_some(),
         };
         Self {
             evolve_u: cfg.eos.evolves_energy(),

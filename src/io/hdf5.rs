@@ -46,11 +46,24 @@ pub struct Units {
     /// Unit time in seconds.
     #[serde(default = "one")]
     pub time_cgs: f64,
+    /// Mean molecular weight μ of the gas, for the snapshots' `Temperatures`
+    /// (T = μ m_p P/(ρ k_B)); default 0.6 (ionised gas of solar composition).
+    #[serde(default = "default_mu")]
+    pub mean_molecular_weight: f64,
 }
 
 fn one() -> f64 {
     1.0
 }
+
+fn default_mu() -> f64 {
+    0.6
+}
+
+/// Proton mass in grams (CODATA 2018).
+const PROTON_MASS_G: f64 = 1.672_621_923_69e-24;
+/// Boltzmann's constant in erg/K (exact in the SI).
+const BOLTZMANN_CGS: f64 = 1.380_649e-16;
 
 impl Default for Units {
     fn default() -> Self {
@@ -58,6 +71,7 @@ impl Default for Units {
             mass_cgs: 1.0,
             length_cgs: 1.0,
             time_cgs: 1.0,
+            mean_molecular_weight: default_mu(),
         }
     }
 }
@@ -68,6 +82,7 @@ impl Units {
             ("mass_cgs", self.mass_cgs),
             ("length_cgs", self.length_cgs),
             ("time_cgs", self.time_cgs),
+            ("mean_molecular_weight", self.mean_molecular_weight),
         ] {
             if !(v > 0.0 && v.is_finite()) {
                 return Err(format!("key `units.{k}`: must be > 0, got {v}"));
@@ -80,6 +95,12 @@ impl Units {
     fn factor(&self, e: Exponents) -> f64 {
         self.mass_cgs.powf(e.m) * self.length_cgs.powf(e.l) * self.time_cgs.powf(e.t)
     }
+
+    /// Kelvin per code unit of P/ρ (specific energy): T = μ m_p (P/ρ) / k_B.
+    pub fn kelvin_per_specific_energy(&self) -> f64 {
+        let v = self.length_cgs / self.time_cgs;
+        self.mean_molecular_weight * PROTON_MASS_G * v * v / BOLTZMANN_CGS
+    }
 }
 
 /// What a snapshot file says about the run beyond the particles.
@@ -90,19 +111,31 @@ pub struct RunMetadata {
     pub units: Units,
     /// Whether every axis is periodic (SWIFT's `PeriodicBoundariesOn`).
     pub periodic: bool,
+    /// Whether `units` are physical (`[units]` or a binary's masses and period): then the
+    /// gas has `Temperatures` in K.
+    pub physical: bool,
 }
 
-/// Unit exponents of a dataset: mass, length, time (current and temperature are 0 here).
+/// Unit exponents of a dataset: mass, length, time, temperature (current is 0 here).
 #[derive(Clone, Copy)]
 struct Exponents {
     m: f64,
     l: f64,
     t: f64,
+    temp: f64,
 }
 
 const fn exps(m: f64, l: f64, t: f64) -> Exponents {
-    Exponents { m, l, t }
+    Exponents { m, l, t, temp: 0.0 }
 }
+
+/// Kelvin: U_T (1 K in SWIFT's and sphdisk's units) to the first power.
+const KELVIN: Exponents = Exponents {
+    m: 0.0,
+    l: 0.0,
+    t: 0.0,
+    temp: 1.0,
+};
 
 /// The file names of a snapshot written as `num_files` parts: `base` itself for one file,
 /// `stem.k.hdf5` for several (SWIFT's convention).
@@ -340,6 +373,33 @@ fn encode_part(
     for (name, data, e, desc) in scalars {
         add_dataset(&mut gas, name, data, None, e, desc, u);
     }
+    if meta.physical {
+        // T = μ m_p P/(ρ k_B): P/ρ is c_s² of the isothermal sound speed for every EOS
+        // (ideal: (γ−1) u; locally isothermal: c_s(R)²; 2D: the integrated P over Σ).
+        let k = u.kelvin_per_specific_energy();
+        let temperature: Vec<f64> = r
+            .clone()
+            .map(|i| {
+                if snap.rho[i] > 0.0 {
+                    k * snap.p[i] / snap.rho[i]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        add_dataset(
+            &mut gas,
+            "Temperatures",
+            &temperature,
+            None,
+            KELVIN,
+            &format!(
+                "Temperatures in K: mu m_p P / (rho k_B) with mu = {}",
+                u.mean_molecular_weight
+            ),
+            u,
+        );
+    }
     let ids = gas.create_dataset("ParticleIDs").with_u64_data(&snap.id[r]);
     ids.set_attr("Description", AttrValue::AsciiString("Unique IDs".into()));
     set_unit_attrs(ids, exps(0.0, 0.0, 0.0), u);
@@ -421,7 +481,7 @@ fn set_unit_attrs(ds: &mut hdf5_pure::DatasetBuilder, e: Exponents, units: Units
     ds.set_attr("U_L exponent", AttrValue::F32Array(vec![e.l as f32]));
     ds.set_attr("U_t exponent", AttrValue::F32Array(vec![e.t as f32]));
     ds.set_attr("U_I exponent", AttrValue::F32Array(vec![0.0]));
-    ds.set_attr("U_T exponent", AttrValue::F32Array(vec![0.0]));
+    ds.set_attr("U_T exponent", AttrValue::F32Array(vec![e.temp as f32]));
     ds.set_attr("a-scale exponent", AttrValue::F32Array(vec![0.0]));
     ds.set_attr("h-scale exponent", AttrValue::F32Array(vec![0.0]));
     let f = units.factor(e);
@@ -805,8 +865,10 @@ mod tests {
                 mass_cgs: 2e33,
                 length_cgs: 7e10,
                 time_cgs: 1e3,
+                mean_molecular_weight: 0.6,
             },
             periodic: true,
+            physical: true,
         }
     }
 
@@ -854,6 +916,40 @@ mod tests {
             e.contains("virtual snapshot") && e.contains("lone.0.hdf5"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn temperatures_in_kelvin_only_with_physical_units() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("snap.hdf5");
+        let snap = sample(30, 3);
+        let m = meta();
+        write_snapshot(&path, &snap, &m, 1).unwrap();
+        let f = File::open(&path).unwrap();
+        let t = f.dataset("PartType0/Temperatures").unwrap();
+        // μ m_p v²/k_B with v = 7e10 cm / 1e3 s: 0.6 · 1.67262e-24 · 4.9e15 / 1.380649e-16.
+        let k = m.units.kelvin_per_specific_energy();
+        assert!((k / (0.6 * 1.672_621_923_69e-24 * 4.9e15 / 1.380_649e-16) - 1.0).abs() < 1e-15);
+        let expect: Vec<f64> = (0..30).map(|i| k * snap.p[i] / snap.rho[i]).collect();
+        assert_eq!(t.read_f64().unwrap(), expect);
+        let a = t.attrs().unwrap();
+        assert_eq!(a["U_T exponent"], AttrValue::F32Array(vec![1.0]));
+        assert_eq!(a["U_L exponent"], AttrValue::F32Array(vec![0.0]));
+        assert_eq!(
+            attr_f64(
+                &a,
+                "Conversion factor to CGS (not including cosmological corrections)"
+            ),
+            Some(1.0)
+        );
+        // G = 1 units: no kelvin, no field.
+        let plain = RunMetadata {
+            physical: false,
+            ..meta()
+        };
+        write_snapshot(&path, &snap, &plain, 1).unwrap();
+        let f = File::open(&path).unwrap();
+        assert!(f.dataset("PartType0/Temperatures").is_err());
     }
 
     #[test]
