@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 """CI check that the community's tools open sphdisk's snapshots.
 
-1. yt's SWIFT front end loads a 3D snapshot: the particle count and total mass equal the
-   header's and the particles' own, and the SPH density field is the one stored.
+1. yt's SWIFT front end loads a 3D, a 2D and a 1D snapshot: the particle count and total
+   mass equal the header's and the particles' own, and the SPH density field is the one
+   stored (the 2D one is Σ: yt labels every `Densities` mass/length³).
 2. h5py reads a snapshot split over several files (SWIFT's multi-file convention): the
-   parts' NumPart_ThisFile add up to NumPart_Total and together hold every particle once.
+   parts' NumPart_ThisFile add up to NumPart_Total and together hold every particle once;
+   scripts/virtual_snapshot.py writes SWIFT's virtual file beside them, which yt and
+   swiftsimio open whole, and sphdisk reads back (render).
 3. swiftsimio (SWIFT's own reader) loads a 3D and a 2D snapshot with units: every
    particle, the stored masses and densities, the header's time and dimension.
+4. With physical units ([units]), `Temperatures` in K: swiftsimio and yt read them.
 
 Usage: scripts/check_snapshots.py [path/to/sphdisk]   (default target/release/sphdisk)
 """
@@ -35,26 +39,44 @@ def run(problem, out, *sets):
 with tempfile.TemporaryDirectory() as tmp:
     tmp = pathlib.Path(tmp)
 
-    # 1. yt on a 3D snapshot (Sedov blast, 20³ particles).
+    def yt_check(snap, n_expected, dim):
+        """yt opens `snap` whole: count, total mass and densities are the file's."""
+        with h5py.File(snap, "r") as f:
+            n_header = int(f["Header"].attrs["NumPart_Total"][0])
+            mass_h5 = float(f["PartType0/Masses"][:].sum())
+            rho_h5 = np.sort(f["PartType0/Densities"][:])
+            assert int(f["HydroScheme"].attrs["Dimension"][0]) == dim
+        ds = yt.load(str(snap))
+        assert type(ds).__name__ == "SwiftDataset", type(ds)
+        # yt's particle index takes three axes: the header says 3 for 1D and 2D files too.
+        assert ds.dimensionality == 3
+        ad = ds.all_data()
+        mass = ad["PartType0", "Mass"]
+        assert len(mass) == n_header == n_expected, (len(mass), n_header, n_expected)
+        # The same numbers summed in another order: equal to round-off.
+        assert abs(float(mass.sum()) - mass_h5) <= 1e-12 * mass_h5, (float(mass.sum()), mass_h5)
+        rho = np.sort(np.asarray(ad["gas", "density"]))
+        assert np.array_equal(rho, rho_h5), "yt's gas density is not the stored one"
+        assert rho.min() > 0
+        print(f"yt: {dim}D {snap.name}, SwiftDataset, {len(mass)} particles, "
+              f"mass {float(mass.sum()):.15g}, density {rho.min():.4g}..{rho.max():.4g}")
+        return ds
+
+    # 1. yt on a 3D snapshot (Sedov blast, 20³ particles), a 2D one (the spreading ring,
+    #    with its central point mass) and a 1D one (Sod).
     run("sedov.toml", tmp / "s3", "particles.n=20", "time.end=0.01", "output.interval=0.01")
     snap = tmp / "s3" / "snap_0001.hdf5"
-    with h5py.File(snap, "r") as f:
-        n_header = int(f["Header"].attrs["NumPart_Total"][0])
-        mass_h5 = float(f["PartType0/Masses"][:].sum())
-        rho_h5 = np.sort(f["PartType0/Densities"][:])
-    ds = yt.load(str(snap))
-    assert type(ds).__name__ == "SwiftDataset", type(ds)
-    assert ds.dimensionality == 3
-    ad = ds.all_data()
-    mass = ad["PartType0", "Mass"]
-    assert len(mass) == n_header == 20**3, (len(mass), n_header)
-    # The same numbers summed in another order: equal to round-off.
-    assert abs(float(mass.sum()) - mass_h5) <= 1e-12 * mass_h5, (float(mass.sum()), mass_h5)
-    rho = np.sort(np.asarray(ad["gas", "density"]))
-    assert np.array_equal(rho, rho_h5), "yt's gas density is not the stored one"
-    assert rho.min() > 0
-    print(f"yt: SwiftDataset, {len(mass)} particles, mass {float(mass.sum()):.15g}, "
-          f"density {rho.min():.4g}..{rho.max():.4g}")
+    yt_check(snap, 20**3, 3)
+    run("ring.toml", tmp / "r", "particles.n=20", "ring.tau_end=0.017",
+        "output.interval=0.01")
+    ring_snap = tmp / "r" / "snap_0001.hdf5"
+    with h5py.File(ring_snap, "r") as f:
+        n_ring = int(f["Header"].attrs["NumPart_Total"][0])
+    ds = yt_check(ring_snap, n_ring, 2)
+    # The point mass (SWIFT's sink type) is there too.
+    assert len(ds.all_data()["PartType3", "Mass"]) == 1
+    run("sod.toml", tmp / "s1", "particles.n=200", "time.end=0.01", "output.interval=0.01")
+    yt_check(tmp / "s1" / "snap_0001.hdf5", 200 + 25, 1)
 
     # 2. h5py on a multi-file snapshot (2D Sedov, 3 files per snapshot).
     run("sedov2d.toml", tmp / "m", "particles.n=30", "time.end=0.01",
@@ -76,11 +98,25 @@ with tempfile.TemporaryDirectory() as tmp:
     assert sum(counts) == total == 900, (counts, total)
     assert len(np.unique(ids)) == total, "a particle is missing or repeated"
     print(f"h5py: multi-file snapshot, {len(parts)} files, {counts} = {total} particles")
+    # A part alone is a third of the particles to yt and swiftsimio; the virtual file is all.
+    subprocess.run([sys.executable, str(root / "scripts/virtual_snapshot.py"),
+                    str(parts[0])], check=True)
+    virtual = tmp / "m" / "snap_0001.hdf5"
+    ds = yt_check(virtual, 900, 2)
+    assert np.array_equal(np.sort(np.asarray(ds.all_data()["PartType0", "ParticleIDs"])),
+                          np.sort(ids))
+    data = swiftsimio.load(str(virtual))
+    assert not data.metadata.partial_snapshot
+    assert len(data.gas.masses) == 900
+    assert np.array_equal(np.sort(np.asarray(data.gas.particle_ids)), np.sort(ids))
+    print(f"swiftsimio: virtual file of {len(parts)} parts, {len(data.gas.masses)} particles")
+    # sphdisk follows the virtual file to its parts.
+    subprocess.run([exe, "render", str(virtual), "--out", str(tmp / "m" / "v.png")],
+                   check=True, stdout=subprocess.DEVNULL)
+    assert (tmp / "m" / "v.png").stat().st_size > 0
 
     # 3. swiftsimio on the 3D Sedov snapshot and a 2D one (the spreading ring).
-    run("ring.toml", tmp / "r", "particles.n=20", "ring.tau_end=0.017",
-        "output.interval=0.01")
-    for path, dim in [(snap, 3), (tmp / "r" / "snap_0001.hdf5", 2)]:
+    for path, dim in [(snap, 3), (ring_snap, 2)]:
         with h5py.File(path, "r") as f:
             n = int(f["Header"].attrs["NumPart_Total"][0])
             t = float(f["Header"].attrs["Time"][0])
@@ -98,4 +134,33 @@ with tempfile.TemporaryDirectory() as tmp:
         assert abs(float(data.metadata.time.value) - t) <= 1e-12 * max(t, 1.0)
         print(f"swiftsimio {swiftsimio.__version__}: {dim}D, {n} particles, "
               f"density in {gas.densities.units}, t = {t}")
+    # 4. Temperatures in K where the problem file gives physical units: swiftsimio reads them
+    #    in K and they are μ m_p P/(ρ k_B) of the stored P and ρ; yt's gas temperature is
+    #    the same field. Without [units] there are none (G = 1 units have no kelvin).
+    run("sedov.toml", tmp / "u", "particles.n=12", "time.end=0.01", "output.interval=0.01",
+        "units.mass_cgs=2e33", "units.length_cgs=1.5e13", "units.time_cgs=3.15e7",
+        "units.mean_molecular_weight=1.3")
+    usnap = tmp / "u" / "snap_0001.hdf5"
+    with h5py.File(usnap, "r") as f:
+        g = f["PartType0"]
+        p_cgs = g["Pressures"][:] * g["Pressures"].attrs[
+            "Conversion factor to CGS (not including cosmological corrections)"][0]
+        rho_cgs = g["Densities"][:] * g["Densities"].attrs[
+            "Conversion factor to CGS (not including cosmological corrections)"][0]
+        t_file = g["Temperatures"][:]
+    m_p, k_b = 1.67262192369e-24, 1.380649e-16
+    t_expect = 1.3 * m_p * p_cgs / (rho_cgs * k_b)
+    # The same product in another order: round-off.
+    assert np.allclose(t_file, t_expect, rtol=1e-12, atol=0), "Temperatures"
+    data = swiftsimio.load(str(usnap))
+    temps = data.gas.temperatures
+    assert str(temps.units) == "K", temps.units
+    assert np.array_equal(np.asarray(temps.to("K")), t_file)
+    ds = yt.load(str(usnap))
+    # yt's SWIFT front end knows the units of a few fields only: the values, unitless.
+    t_yt = np.sort(np.asarray(ds.all_data()["gas", "temperature"]))
+    assert np.array_equal(t_yt, np.sort(t_file)), "yt's gas temperature"
+    with h5py.File(snap, "r") as f:
+        assert "Temperatures" not in f["PartType0"], "no kelvin without [units]"
+    print(f"Temperatures: {t_file.min():.4g}..{t_file.max():.4g} K (swiftsimio, yt)")
 print("snapshot checks passed")

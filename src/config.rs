@@ -187,6 +187,9 @@ fn default_max_steps() -> u64 {
     10_000_000
 }
 
+/// Default of `output.statistics_steps`.
+pub const DEFAULT_STATISTICS_STEPS: u64 = 10;
+
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSection {
@@ -199,6 +202,9 @@ pub struct OutputSection {
     pub checkpoint_steps: Option<u64>,
     /// Wall-clock seconds between checkpoints; default 600. The last two are kept.
     pub checkpoint_wall_seconds: Option<f64>,
+    /// Steps between rows of `statistics.csv` (global totals); default
+    /// [`DEFAULT_STATISTICS_STEPS`]. Rows are also written at step 0 and at the end.
+    pub statistics_steps: Option<u64>,
     /// Time between rows of a binary's `lightcurve.csv` and `monitor.csv`; default
     /// P_orb / 50 = 2π/50.
     pub lightcurve_interval: Option<f64>,
@@ -504,9 +510,14 @@ impl Config {
     /// The code units in cgs: `[units]`, or those a binary in physical values defines,
     /// or 1.
     pub fn units(&self) -> crate::io::hdf5::Units {
+        self.physical_units().unwrap_or_default()
+    }
+
+    /// The physical units of `[units]`, or a binary's from its masses and period; none
+    /// when the code units are only G = 1 units (then the cgs factors are 1).
+    pub fn physical_units(&self) -> Option<crate::io::hdf5::Units> {
         self.units
             .or_else(|| self.binary.as_ref().and_then(|b| b.physical_units()))
-            .unwrap_or_default()
     }
 
     pub fn dimension(&self) -> usize {
@@ -545,6 +556,9 @@ impl Config {
         }
         if self.output.checkpoint_steps == Some(0) {
             bail!("key `output.checkpoint_steps`: must be ≥ 1, got 0");
+        }
+        if self.output.statistics_steps == Some(0) {
+            bail!("key `output.statistics_steps`: must be ≥ 1, got 0");
         }
         if let Some(w) = self.output.checkpoint_wall_seconds {
             positive("output.checkpoint_wall_seconds", w)?;

@@ -62,7 +62,7 @@ enum Command {
     Render {
         /// A snapshot (`runs/X/snap_0003.hdf5`) or a run folder (`runs/X`).
         input: PathBuf,
-        /// column-density, density, dissipation, temperature (u) or velocity.
+        /// column-density, density, dissipation, temperature (P/ρ = kT/μm_p) or velocity.
         #[arg(long, default_value = "column-density")]
         quantity: String,
         /// face-on, edge-on or slice.

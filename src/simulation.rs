@@ -26,7 +26,9 @@ use crate::io::summary::{
     AccretionLedger, Conservation, Flow, MassBudget, MassBudgetRecord, Summary, TotalsRecord,
     peak_rss_bytes,
 };
-use crate::io::timeseries::{LIGHTCURVE_HEADER, MODES_HEADER, MONITOR_HEADER, Series};
+use crate::io::timeseries::{
+    LIGHTCURVE_HEADER, MODES_HEADER, MONITOR_HEADER, STATISTICS_HEADER, Series,
+};
 use crate::particles::Particles;
 use crate::physics::l1_stream::InjectorState;
 use crate::physics::mass_transfer::MassTransfer;
@@ -410,6 +412,7 @@ impl<const D: usize> Run<D> {
             parameters: cfg.flattened(),
             units: cfg.units(),
             periodic: bx.kinds.iter().all(|k| *k == BoundaryKind::Periodic),
+            physical: cfg.physical_units().is_some(),
         };
         Self {
             evolve_u: cfg.eos.evolves_energy(),
@@ -754,6 +757,26 @@ fn advance<const D: usize>(
         }
         _ => [Series::silent(), Series::silent(), Series::silent()],
     };
+    let stats_every = run
+        .cfg
+        .output
+        .statistics_steps
+        .unwrap_or(crate::config::DEFAULT_STATISTICS_STEPS);
+    let mut stats = if root {
+        let fresh = run.st.steps == 0;
+        Series::open(
+            &opts.out,
+            "statistics.csv",
+            STATISTICS_HEADER,
+            fresh,
+            run.st.t,
+        )?
+    } else {
+        Series::silent()
+    };
+    if run.st.steps == 0 {
+        statistics_row(team, &run.p, gravity, &run.st, 0.0, &mut stats)?;
+    }
     let bar = progress_bar(opts.progress && root);
     while run.st.t < t_end * (1.0 - 1e-12) {
         if let Some(mt) = &run.mt {
@@ -873,6 +896,9 @@ fn advance<const D: usize>(
             );
         }
         let (t, steps) = (st.t, st.steps);
+        if steps % stats_every == 0 || t >= t_end * (1.0 - 1e-12) {
+            statistics_row(team, &run.p, gravity, &run.st, dt, &mut stats)?;
+        }
         if let Some(mt) = &run.mt
             && t >= run.st.next_series
         {
@@ -1030,6 +1056,38 @@ fn inject_stream<const D: usize>(
         }
         st.prev = TotalsRecord::from(&global_totals(team, p, phys.gravity.as_ref()));
     }
+}
+
+/// A row of `statistics.csv` after a step of `dt` (collective: totals over ranks; rank 0
+/// writes).
+fn statistics_row<const D: usize>(
+    team: &mut dyn Team<D>,
+    p: &Particles<D>,
+    gravity: Option<&crate::physics::gravity::PointMass>,
+    st: &LoopState,
+    dt: f64,
+    out: &mut Series,
+) -> Result<()> {
+    let tot = global_totals(team, p, gravity);
+    let mut n = [p.len() as f64];
+    team.sum(&mut n);
+    let momentum = |d: usize| tot.momentum.get(d).copied().unwrap_or(0.0);
+    out.row(&[
+        st.t,
+        st.steps as f64,
+        dt,
+        n[0],
+        tot.mass,
+        st.accreted.mass + st.budget.accreted.mass,
+        tot.kinetic,
+        tot.internal,
+        tot.potential,
+        tot.energy(),
+        momentum(0),
+        momentum(1),
+        momentum(2),
+        tot.angular_momentum,
+    ])
 }
 
 /// A row of `lightcurve.csv`, `monitor.csv` and `modes.csv` (collective: sums over ranks; rank 0

@@ -129,6 +129,7 @@ fn force_leaves_only_the_new_runs_files() {
             "run.toml",
             "snap_0000.hdf5",
             "snapshots.json",
+            "statistics.csv",
         ]
     );
     assert_eq!(after["notes.txt"], b"my notes");

@@ -9,7 +9,11 @@
 //!
 //! A snapshot may be split over several files (SWIFT's multi-file convention, one per MPI
 //! rank or `output.files_per_snapshot`): `name.0.hdf5`, `name.1.hdf5`, …, each with its own
-//! `NumPart_ThisFile` and the shared `NumPart_Total` and `NumFilesPerSnapshot`.
+//! `NumPart_ThisFile` and the shared `NumPart_Total` and `NumFilesPerSnapshot`. A virtual
+//! file beside them (SWIFT's, `Header/Virtual` = 1) is read through its parts.
+//!
+//! `Header/Dimension` is 3 in every file (yt's SWIFT front end needs it for its particle
+//! index); the run's dimension is `HydroScheme/Dimension`.
 //!
 //! Reading accepts SWIFT's plural names and GADGET's singular ones (`Density`,
 //! `SmoothingLength`, `InternalEnergy`, `Mass` or the header's `MassTable`).
@@ -42,11 +46,24 @@ pub struct Units {
     /// Unit time in seconds.
     #[serde(default = "one")]
     pub time_cgs: f64,
+    /// Mean molecular weight μ of the gas, for the snapshots' `Temperatures`
+    /// (T = μ m_p P/(ρ k_B)); default 0.6 (ionised gas of solar composition).
+    #[serde(default = "default_mu")]
+    pub mean_molecular_weight: f64,
 }
 
 fn one() -> f64 {
     1.0
 }
+
+fn default_mu() -> f64 {
+    0.6
+}
+
+/// Proton mass in grams (CODATA 2018).
+const PROTON_MASS_G: f64 = 1.672_621_923_69e-24;
+/// Boltzmann's constant in erg/K (exact in the SI).
+const BOLTZMANN_CGS: f64 = 1.380_649e-16;
 
 impl Default for Units {
     fn default() -> Self {
@@ -54,6 +71,7 @@ impl Default for Units {
             mass_cgs: 1.0,
             length_cgs: 1.0,
             time_cgs: 1.0,
+            mean_molecular_weight: default_mu(),
         }
     }
 }
@@ -64,6 +82,7 @@ impl Units {
             ("mass_cgs", self.mass_cgs),
             ("length_cgs", self.length_cgs),
             ("time_cgs", self.time_cgs),
+            ("mean_molecular_weight", self.mean_molecular_weight),
         ] {
             if !(v > 0.0 && v.is_finite()) {
                 return Err(format!("key `units.{k}`: must be > 0, got {v}"));
@@ -76,6 +95,12 @@ impl Units {
     fn factor(&self, e: Exponents) -> f64 {
         self.mass_cgs.powf(e.m) * self.length_cgs.powf(e.l) * self.time_cgs.powf(e.t)
     }
+
+    /// Kelvin per code unit of P/ρ (specific energy): T = μ m_p (P/ρ) / k_B.
+    pub fn kelvin_per_specific_energy(&self) -> f64 {
+        let v = self.length_cgs / self.time_cgs;
+        self.mean_molecular_weight * PROTON_MASS_G * v * v / BOLTZMANN_CGS
+    }
 }
 
 /// What a snapshot file says about the run beyond the particles.
@@ -86,19 +111,31 @@ pub struct RunMetadata {
     pub units: Units,
     /// Whether every axis is periodic (SWIFT's `PeriodicBoundariesOn`).
     pub periodic: bool,
+    /// Whether `units` are physical (`[units]` or a binary's masses and period): then the
+    /// gas has `Temperatures` in K.
+    pub physical: bool,
 }
 
-/// Unit exponents of a dataset: mass, length, time (current and temperature are 0 here).
+/// Unit exponents of a dataset: mass, length, time, temperature (current is 0 here).
 #[derive(Clone, Copy)]
 struct Exponents {
     m: f64,
     l: f64,
     t: f64,
+    temp: f64,
 }
 
 const fn exps(m: f64, l: f64, t: f64) -> Exponents {
-    Exponents { m, l, t }
+    Exponents { m, l, t, temp: 0.0 }
 }
+
+/// Kelvin: U_T (1 K in SWIFT's and sphdisk's units) to the first power.
+const KELVIN: Exponents = Exponents {
+    m: 0.0,
+    l: 0.0,
+    t: 0.0,
+    temp: 1.0,
+};
 
 /// The file names of a snapshot written as `num_files` parts: `base` itself for one file,
 /// `stem.k.hdf5` for several (SWIFT's convention).
@@ -167,10 +204,10 @@ fn encode_part(
     );
     header.set_attr("BoxSize", AttrValue::F64Array(box_size));
     header.set_attr("Shift", AttrValue::F64Array(snap.shift.to_vec()));
-    header.set_attr(
-        "Dimension",
-        AttrValue::I32Array(vec![snap.dimension as i32]),
-    );
+    // yt's SWIFT front end builds one periodicity flag per `Header/Dimension` while its
+    // particle index reads three, so 1D and 2D files say 3 here (the coordinates are N×3);
+    // the hydro dimension is `HydroScheme/Dimension`, where SWIFT writes it too.
+    header.set_attr("Dimension", AttrValue::I32Array(vec![3]));
     header.set_attr("Time", AttrValue::F64Array(vec![snap.time]));
     header.set_attr("Step", AttrValue::U64Array(vec![snap.step]));
     header.set_attr("NumPart_ThisFile", AttrValue::U64Array(this_file.to_vec()));
@@ -346,6 +383,33 @@ fn encode_part(
     for (name, data, e, desc) in scalars {
         add_dataset(&mut gas, name, data, None, e, desc, u);
     }
+    if meta.physical {
+        // T = μ m_p P/(ρ k_B): P/ρ is c_s² of the isothermal sound speed for every EOS
+        // (ideal: (γ−1) u; locally isothermal: c_s(R)²; 2D: the integrated P over Σ).
+        let k = u.kelvin_per_specific_energy();
+        let temperature: Vec<f64> = r
+            .clone()
+            .map(|i| {
+                if snap.rho[i] > 0.0 {
+                    k * snap.p[i] / snap.rho[i]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        add_dataset(
+            &mut gas,
+            "Temperatures",
+            &temperature,
+            None,
+            KELVIN,
+            &format!(
+                "Temperatures in K: mu m_p P / (rho k_B) with mu = {}",
+                u.mean_molecular_weight
+            ),
+            u,
+        );
+    }
     let ids = gas.create_dataset("ParticleIDs").with_u64_data(&snap.id[r]);
     ids.set_attr("Description", AttrValue::AsciiString("Unique IDs".into()));
     set_unit_attrs(ids, exps(0.0, 0.0, 0.0), u);
@@ -427,7 +491,7 @@ fn set_unit_attrs(ds: &mut hdf5_pure::DatasetBuilder, e: Exponents, units: Units
     ds.set_attr("U_L exponent", AttrValue::F32Array(vec![e.l as f32]));
     ds.set_attr("U_t exponent", AttrValue::F32Array(vec![e.t as f32]));
     ds.set_attr("U_I exponent", AttrValue::F32Array(vec![0.0]));
-    ds.set_attr("U_T exponent", AttrValue::F32Array(vec![0.0]));
+    ds.set_attr("U_T exponent", AttrValue::F32Array(vec![e.temp as f32]));
     ds.set_attr("a-scale exponent", AttrValue::F32Array(vec![0.0]));
     ds.set_attr("h-scale exponent", AttrValue::F32Array(vec![0.0]));
     let f = units.factor(e);
@@ -444,8 +508,27 @@ fn set_unit_attrs(ds: &mut hdf5_pure::DatasetBuilder, e: Exponents, units: Units
 /// Reads a snapshot: one file, or all parts of a multi-file snapshot when given `name.hdf5`
 /// whose parts are `name.k.hdf5` (or any one part, which names the others).
 pub fn read_snapshot(path: &Path) -> Result<Snapshot> {
-    let first = first_file(path)?;
-    let (mut snap, num_files, this_file) = read_one(&first)?;
+    let mut first = first_file(path)?;
+    let (mut snap, num_files, this_file) = match read_one(&first)? {
+        Part::Data(s, n, k) => (*s, n, k),
+        Part::Virtual => {
+            // SWIFT's virtual file (`scripts/virtual_snapshot.py` writes one) maps the
+            // parts' datasets, which this reader does not follow: read the parts.
+            let part0 = part_paths(&first, 2).remove(0);
+            if !part0.exists() {
+                bail!(
+                    "{} is a virtual snapshot and its parts ({}, …) are missing",
+                    first.display(),
+                    part0.display()
+                );
+            }
+            first = part0;
+            match read_one(&first)? {
+                Part::Data(s, n, k) => (*s, n, k),
+                Part::Virtual => bail!("{}: a part is a virtual file", first.display()),
+            }
+        }
+    };
     if num_files > 1 {
         // Find the base name from `stem.k.hdf5` and read the other parts in order.
         let stem = first
@@ -460,14 +543,16 @@ pub fn read_snapshot(path: &Path) -> Result<Snapshot> {
         let parts = part_paths(&base, num_files);
         clear_particles(&mut snap);
         for (k, part) in parts.iter().enumerate() {
-            let (s, n_files, idx) = read_one(part)?;
+            let Part::Data(s, n_files, idx) = read_one(part)? else {
+                bail!("{}: a part is a virtual file", part.display());
+            };
             if n_files != num_files || idx != k {
                 bail!(
                     "{}: part {idx} of {n_files}, expected part {k} of {num_files}",
                     part.display()
                 );
             }
-            append(&mut snap, s);
+            append(&mut snap, *s);
         }
     }
     Ok(snap)
@@ -585,8 +670,16 @@ fn attr_vec(attrs: &HashMap<String, AttrValue>, key: &str) -> Option<Vec<f64>> {
     })
 }
 
-/// Reads one file; returns the snapshot part, `NumFilesPerSnapshot` and this file's index.
-fn read_one(path: &Path) -> Result<(Snapshot, usize, usize)> {
+/// What one file holds.
+enum Part {
+    /// The particles, `NumFilesPerSnapshot` and this file's index.
+    Data(Box<Snapshot>, usize, usize),
+    /// Nothing but links to the parts (`Header/Virtual` = 1, as SWIFT marks its own).
+    Virtual,
+}
+
+/// Reads one file.
+fn read_one(path: &Path) -> Result<Part> {
     let what = path.display();
     let bytes = std::fs::read(path).with_context(|| format!("cannot read snapshot {what}"))?;
     let file = File::from_bytes(bytes)
@@ -596,6 +689,9 @@ fn read_one(path: &Path) -> Result<(Snapshot, usize, usize)> {
         .map_err(|_| anyhow::anyhow!("{what}: no /Header group (not a SWIFT or GADGET snapshot)"))?
         .attrs()
         .map_err(|e| anyhow::anyhow!("{what}: cannot read /Header attributes: {e}"))?;
+    if attr_f64(&header, "Virtual") == Some(1.0) {
+        return Ok(Part::Virtual);
+    }
     let box_size = attr_vec(&header, "BoxSize").unwrap_or_else(|| vec![1.0]);
     let box_size: Vec<f64> = (0..3)
         .map(|a| box_size.get(a).copied().unwrap_or(box_size[0]))
@@ -632,12 +728,18 @@ fn read_one(path: &Path) -> Result<(Snapshot, usize, usize)> {
         bail!("{what}: /PartType0/Coordinates is not N×3");
     }
     let n = coords.len() / 3;
-    let dimension = match attr_f64(&header, "Dimension") {
+    // The hydro dimension: `HydroScheme/Dimension` (sphdisk, SWIFT), else the header's.
+    let hydro_dimension = file
+        .group("HydroScheme")
+        .ok()
+        .and_then(|g| g.attrs().ok())
+        .and_then(|a| attr_f64(&a, "Dimension"));
+    let dimension = match hydro_dimension.or_else(|| attr_f64(&header, "Dimension")) {
         Some(d) => d as usize,
         None => 3,
     };
     if !(1..=3).contains(&dimension) {
-        bail!("{what}: Header/Dimension is {dimension}, expected 1, 2 or 3");
+        bail!("{what}: the dimension is {dimension}, expected 1, 2 or 3");
     }
     let split = |v: &[f64]| -> [Vec<f64>; 3] {
         std::array::from_fn(|a| (0..v.len() / 3).map(|i| v[3 * i + a]).collect())
@@ -697,7 +799,7 @@ fn read_one(path: &Path) -> Result<(Snapshot, usize, usize)> {
         diss: column(&["DissipationRates"], "DissipationRates")?.unwrap_or_else(zeros),
         point_masses: read_point_masses(&file, path)?,
     };
-    Ok((snap, num_files, this_file))
+    Ok(Part::Data(Box::new(snap), num_files, this_file))
 }
 
 fn read_point_masses(file: &File, path: &Path) -> Result<Vec<PointMassRecord>> {
@@ -773,8 +875,10 @@ mod tests {
                 mass_cgs: 2e33,
                 length_cgs: 7e10,
                 time_cgs: 1e3,
+                mean_molecular_weight: 0.6,
             },
             periodic: true,
+            physical: true,
         }
     }
 
@@ -801,6 +905,64 @@ mod tests {
     }
 
     #[test]
+    fn a_virtual_file_beside_the_parts_reads_the_parts() {
+        let dir = tempfile::tempdir().unwrap();
+        let base = dir.path().join("snap_0002.hdf5");
+        let snap = sample(60, 2);
+        write_snapshot(&base, &snap, &meta(), 2).unwrap();
+        // What SWIFT's virtual file holds besides its mapped datasets: the header, marked.
+        let mut fb = FileBuilder::new();
+        let mut h = fb.create_group("Header");
+        h.set_attr("Virtual", AttrValue::I32Array(vec![1]));
+        h.set_attr("NumFilesPerSnapshot", AttrValue::I32Array(vec![1]));
+        fb.add_group(h.finish());
+        std::fs::write(&base, fb.finish().unwrap()).unwrap();
+        assert_eq!(read_snapshot(&base).unwrap(), snap);
+        // Without its parts it says so.
+        let lone = dir.path().join("lone.hdf5");
+        std::fs::copy(&base, &lone).unwrap();
+        let e = format!("{:#}", read_snapshot(&lone).unwrap_err());
+        assert!(
+            e.contains("virtual snapshot") && e.contains("lone.0.hdf5"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn temperatures_in_kelvin_only_with_physical_units() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("snap.hdf5");
+        let snap = sample(30, 3);
+        let m = meta();
+        write_snapshot(&path, &snap, &m, 1).unwrap();
+        let f = File::open(&path).unwrap();
+        let t = f.dataset("PartType0/Temperatures").unwrap();
+        // μ m_p v²/k_B with v = 7e10 cm / 1e3 s: 0.6 · 1.67262e-24 · 4.9e15 / 1.380649e-16.
+        let k = m.units.kelvin_per_specific_energy();
+        assert!((k / (0.6 * 1.672_621_923_69e-24 * 4.9e15 / 1.380_649e-16) - 1.0).abs() < 1e-15);
+        let expect: Vec<f64> = (0..30).map(|i| k * snap.p[i] / snap.rho[i]).collect();
+        assert_eq!(t.read_f64().unwrap(), expect);
+        let a = t.attrs().unwrap();
+        assert_eq!(a["U_T exponent"], AttrValue::F32Array(vec![1.0]));
+        assert_eq!(a["U_L exponent"], AttrValue::F32Array(vec![0.0]));
+        assert_eq!(
+            attr_f64(
+                &a,
+                "Conversion factor to CGS (not including cosmological corrections)"
+            ),
+            Some(1.0)
+        );
+        // G = 1 units: no kelvin, no field.
+        let plain = RunMetadata {
+            physical: false,
+            ..meta()
+        };
+        write_snapshot(&path, &snap, &plain, 1).unwrap();
+        let f = File::open(&path).unwrap();
+        assert!(f.dataset("PartType0/Temperatures").is_err());
+    }
+
+    #[test]
     fn header_carries_swift_metadata() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("snap.hdf5");
@@ -808,7 +970,10 @@ mod tests {
         let f = File::open(&path).unwrap();
         let h = f.group("Header").unwrap().attrs().unwrap();
         assert_eq!(h["Code"], AttrValue::AsciiString("SWIFT".into()));
-        assert_eq!(attr_f64(&h, "Dimension"), Some(2.0));
+        // yt needs 3 here for its particle index; the hydro dimension is the scheme's.
+        assert_eq!(attr_f64(&h, "Dimension"), Some(3.0));
+        let hydro = f.group("HydroScheme").unwrap().attrs().unwrap();
+        assert_eq!(attr_f64(&hydro, "Dimension"), Some(2.0));
         assert_eq!(attr_vec(&h, "BoxSize").unwrap(), vec![2.0, 4.0, 1.0]);
         let units = f.group("Units").unwrap().attrs().unwrap();
         assert_eq!(attr_f64(&units, "Unit length in cgs (U_L)"), Some(7e10));

@@ -20,6 +20,7 @@ const RUN_FILES: &[&str] = &[
     "final.csv",
     "final.hdf5",
     "snapshots.json",
+    "statistics.csv",
     "lightcurve.csv",
     "monitor.csv",
     "modes.csv",

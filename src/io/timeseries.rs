@@ -1,5 +1,6 @@
 //! Time series written during a run, a row at a time (FargoCPT's monitor files, Phantom's
-//! `.ev`): for a binary, `lightcurve.csv` (the luminosity L = Σ mᵢ ε̇ᵢ of the dissipated
+//! `.ev`, SWIFT's `statistics.txt`): for every run `statistics.csv` (global totals every
+//! `output.statistics_steps` steps, at step 0 and at the end); for a binary, `lightcurve.csv` (the luminosity L = Σ mᵢ ε̇ᵢ of the dissipated
 //! energy, split into disk, stream and bright-spot regions), `monitor.csv` (the disk's
 //! radius and mass, and the mass budget) and `modes.csv` (the disk's eccentricity, m = 1
 //! and m = 2 modes and longitude of periastron). Rows are appended and flushed at once; a resumed
@@ -114,6 +115,12 @@ fn parse_row(line: &str, names: &[&str], allow_nan: bool) -> anyhow::Result<Vec<
         })
         .collect()
 }
+
+/// Header of `statistics.csv`: time, step, time step, particles, their mass, what the
+/// central mass accreted (mass; a binary's accretor included), energies (kinetic,
+/// internal, potential in the external field, total), momentum and Σ m (x v_y − y v_x),
+/// summed over every rank's particles (unused momentum components 0).
+pub const STATISTICS_HEADER: &str = "t,step,dt,particles,mass,accreted_mass,kinetic_energy,internal_energy,potential_energy,total_energy,px,py,pz,angular_momentum";
 
 /// Header of `lightcurve.csv`.
 pub const LIGHTCURVE_HEADER: &str = "t,orbit,l_total,l_disk,l_stream,l_spot";

@@ -92,6 +92,7 @@ impl BinaryParams {
             mass_cgs: mass,
             length_cgs: a,
             time_cgs: period / std::f64::consts::TAU,
+            ..Default::default()
         })
     }
 

@@ -602,6 +602,7 @@ mod tests {
                 .collect(),
             units: Units::default(),
             periodic: false,
+            physical: false,
         };
         let path = dir.join("snap_0000.hdf5");
         write_snapshot(&path, &s, &meta, 1).unwrap();

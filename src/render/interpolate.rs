@@ -27,7 +27,8 @@ pub enum Quantity {
     Density,
     /// Specific viscous dissipation rate `diss`.
     Dissipation,
-    /// Specific internal energy u (the code has no temperature unit; u ∝ T).
+    /// P/ρ = k_B T/(μ m_p), the temperature in velocity² (c_s² of the isothermal sound
+    /// speed): for every equation of state, the locally isothermal one included.
     Temperature,
     /// Speed |v|.
     Velocity,
@@ -59,7 +60,7 @@ impl Quantity {
             Quantity::ColumnDensity => "Σ (column density)",
             Quantity::Density => "ρ (density)",
             Quantity::Dissipation => "specific dissipation rate",
-            Quantity::Temperature => "u (specific internal energy)",
+            Quantity::Temperature => "P/ρ = kT/μm_p (temperature)",
             Quantity::Velocity => "|v| (speed)",
         }
     }
@@ -106,11 +107,11 @@ impl FromStr for Quantity {
             "column-density" | "column" | "sigma" => Quantity::ColumnDensity,
             "density" | "rho" => Quantity::Density,
             "dissipation" | "diss" => Quantity::Dissipation,
-            "temperature" | "u" => Quantity::Temperature,
+            "temperature" | "T" => Quantity::Temperature,
             "velocity" | "speed" | "v" => Quantity::Velocity,
             _ => bail!(
                 "unknown quantity {s:?}: expected column-density, density, dissipation, \
-                 temperature (u) or velocity"
+                 temperature or velocity"
             ),
         })
     }
@@ -610,7 +611,8 @@ pub fn interpolate(
             let value = || match quantity {
                 Quantity::ColumnDensity | Quantity::Density => snap.rho[j],
                 Quantity::Dissipation => snap.diss[j],
-                Quantity::Temperature => snap.u[j],
+                Quantity::Temperature if snap.rho[j] > 0.0 => snap.p[j] / snap.rho[j],
+                Quantity::Temperature => 0.0,
                 Quantity::Velocity => {
                     let v = [snap.vel[0][j], snap.vel[1][j], snap.vel[2][j]];
                     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
@@ -1023,6 +1025,8 @@ mod tests {
         let mut snap = snapshot(dimension, &pos, &mass, &h, [0.0; 3], [1.0; 3]);
         snap.rho = (0..n).map(|_| 0.5 + rng.uniform()).collect();
         snap.u = (0..n).map(|_| 2.5).collect();
+        // P/ρ = 2.5 (to an ulp) for the temperature.
+        snap.p = snap.rho.iter().map(|r| 2.5 * r).collect();
         snap
     }
 

@@ -60,6 +60,7 @@ mod tests {
             parameters: [("binary.q".to_string(), "0.2".to_string())].into(),
             units: Units::default(),
             periodic: false,
+            physical: false,
         };
         let mut index = SnapshotIndex::default();
         for k in 0..2 {

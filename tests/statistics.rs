@@ -1,0 +1,114 @@
+//! Guards `statistics.csv`, the global totals written during every run: its first and last
+//! rows are `summary.json`'s start and end totals, bit for bit (the same sums of the same
+//! particles), rows come every `output.statistics_steps` steps, and mass plus what was
+//! accreted stays the start's mass in every row.
+
+use std::path::Path;
+
+use sphdisk::io::timeseries::{STATISTICS_HEADER, parse_series};
+
+mod common;
+use common::problem_file as problem;
+use common::{ok, path_str as s, sphdisk_err};
+
+fn column(name: &str) -> usize {
+    STATISTICS_HEADER
+        .split(',')
+        .position(|c| c == name)
+        .unwrap()
+}
+
+fn rows(run: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(run.join("statistics.csv")).unwrap();
+    parse_series(&text, STATISTICS_HEADER, false).unwrap()
+}
+
+#[test]
+fn statistics_rows_are_the_summary_totals_and_conserve_mass_with_accretion() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ring");
+    // The spreading ring: gravity, viscosity and accretion at the inner radius.
+    ok(&[
+        "run",
+        &problem("ring.toml"),
+        "--quiet",
+        "--out",
+        &s(&out),
+        "--set",
+        "particles.n=20",
+        "--set",
+        "ring.tau_end=0.03",
+        "--set",
+        "output.statistics_steps=7",
+        // Inside the ring's inner edge (0.6): particles are accreted from the start.
+        "--set",
+        "gravity.accretion_radius=0.65",
+    ]);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let rows = rows(&out);
+    let (first, last) = (&rows[0], rows.last().unwrap());
+    let steps = summary["steps"].as_u64().unwrap();
+    assert!(steps > 7, "{steps} steps");
+    // Step 0, every 7th step, and the last.
+    let stepcol: Vec<u64> = rows.iter().map(|r| r[column("step")] as u64).collect();
+    let mut expect: Vec<u64> = (0..=steps).step_by(7).collect();
+    if !steps.is_multiple_of(7) {
+        expect.push(steps);
+    }
+    assert_eq!(stepcol, expect);
+    assert_eq!(last[column("t")], summary["t_end"].as_f64().unwrap());
+    assert_eq!(
+        last[column("particles")],
+        summary["particles"].as_f64().unwrap()
+    );
+    for (row, key) in [(first, "totals_start"), (last, "totals_end")] {
+        let t = &summary[key];
+        for (col, field) in [
+            ("mass", "mass"),
+            ("kinetic_energy", "kinetic_energy"),
+            ("internal_energy", "internal_energy"),
+            ("potential_energy", "potential_energy"),
+            ("total_energy", "energy"),
+            ("angular_momentum", "angular_momentum"),
+        ] {
+            // Written with Rust's shortest round-trip formatting: exact.
+            assert_eq!(
+                row[column(col)],
+                t[field].as_f64().unwrap(),
+                "{key}.{field}"
+            );
+        }
+        for (d, col) in ["px", "py"].iter().enumerate() {
+            assert_eq!(
+                row[column(col)],
+                t["momentum"][d].as_f64().unwrap(),
+                "{col}"
+            );
+        }
+        assert_eq!(row[column("pz")], 0.0, "2D: no z momentum");
+    }
+    let accreted = summary["accretion"]["mass"].as_f64().unwrap();
+    assert!(accreted > 0.0, "the ring accretes");
+    assert_eq!(last[column("accreted_mass")], accreted);
+    assert_eq!(first[column("accreted_mass")], 0.0);
+    // Mass present plus mass accreted is the start's in every row; the two are sums of
+    // ~1600 terms in different orders, so they agree to a few ulps (1e-14 relative).
+    let m0 = first[column("mass")];
+    for r in &rows {
+        let m = r[column("mass")] + r[column("accreted_mass")];
+        assert!((m - m0).abs() <= 1e-14 * m0, "t = {}: {m} vs {m0}", r[0]);
+    }
+}
+
+#[test]
+fn statistics_steps_zero_is_an_error_naming_the_key() {
+    let (code, err) = sphdisk_err(&[
+        "check",
+        &problem("sod.toml"),
+        "--set",
+        "output.statistics_steps=0",
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("output.statistics_steps"), "{err}");
+}
