@@ -33,7 +33,6 @@ use serde::Serialize;
 
 use crate::analysis::lightcurve_report::{self, LightcurveFigures};
 use crate::analysis::superhump_report::{self, ModesRow, running_mean};
-use crate::io::atomic::write_atomic;
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
 
 /// Width of the running mean of the light curve, in orbits.
@@ -381,21 +380,7 @@ pub fn analyse_outbursts(run: &Path) -> Result<OutburstReport> {
     f.notes.extend(note);
     let png = run.join("outbursts.png");
     plot_panels(&png, (1800, 1000), &panels(&light, &monitor, &modes, &f)?)?;
-    let json = run.join("outbursts.json");
-    let mut text = serde_json::to_string_pretty(&f)?;
-    text.push('\n');
-    write_atomic(&json, text.as_bytes())?;
-    let summary = run.join("summary.json");
-    if let Ok(old) = std::fs::read_to_string(&summary) {
-        let mut v: serde_json::Value = serde_json::from_str(&old)
-            .with_context(|| format!("{}: not JSON", summary.display()))?;
-        if let Some(obj) = v.as_object_mut() {
-            obj.insert("outbursts".into(), serde_json::to_value(&f)?);
-            let mut text = serde_json::to_string_pretty(&v)?;
-            text.push('\n');
-            write_atomic(&summary, text.as_bytes())?;
-        }
-    }
+    let json = crate::io::summary::write_analysis(run, "outbursts", "outbursts", &f)?;
     Ok(OutburstReport {
         run: run.to_path_buf(),
         figures: f,

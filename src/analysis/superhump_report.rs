@@ -549,22 +549,12 @@ pub fn analyse_superhump(run: &Path) -> Result<SuperhumpReport> {
         )?;
         files.push(png);
     }
-    let json = run.join("superhump.json");
-    let mut text = serde_json::to_string_pretty(&f)?;
-    text.push('\n');
-    write_atomic(&json, text.as_bytes())?;
-    files.push(json);
-    let summary = run.join("summary.json");
-    if let Ok(old) = std::fs::read_to_string(&summary) {
-        let mut v: serde_json::Value = serde_json::from_str(&old)
-            .with_context(|| format!("{}: not JSON", summary.display()))?;
-        if let Some(obj) = v.as_object_mut() {
-            obj.insert("superhump".into(), serde_json::to_value(&f)?);
-            let mut text = serde_json::to_string_pretty(&v)?;
-            text.push('\n');
-            write_atomic(&summary, text.as_bytes())?;
-        }
-    }
+    files.push(crate::io::summary::write_analysis(
+        run,
+        "superhump",
+        "superhump",
+        &f,
+    )?);
     Ok(SuperhumpReport {
         run: run.to_path_buf(),
         figures: f,

@@ -315,3 +315,31 @@ pub fn peak_rss_bytes() -> u64 {
         })
         .map_or(0, |kb| kb * 1024)
 }
+
+/// Writes an analysis' figures to `run/NAME.json` and under the key `key` of the run's
+/// `summary.json`, where the run has one (a run still going or stopped has none). Returns
+/// the JSON file's path.
+pub fn write_analysis<T: Serialize>(
+    run: &Path,
+    name: &str,
+    key: &str,
+    figures: &T,
+) -> Result<std::path::PathBuf> {
+    use anyhow::Context;
+    let json = run.join(format!("{name}.json"));
+    let mut text = serde_json::to_string_pretty(figures)?;
+    text.push('\n');
+    write_atomic(&json, text.as_bytes())?;
+    let summary = run.join("summary.json");
+    if let Ok(old) = std::fs::read_to_string(&summary) {
+        let mut v: serde_json::Value = serde_json::from_str(&old)
+            .with_context(|| format!("{}: not JSON", summary.display()))?;
+        if let Some(obj) = v.as_object_mut() {
+            obj.insert(key.into(), serde_json::to_value(figures)?);
+            let mut text = serde_json::to_string_pretty(&v)?;
+            text.push('\n');
+            write_atomic(&summary, text.as_bytes())?;
+        }
+    }
+    Ok(json)
+}
