@@ -194,13 +194,7 @@ pub fn parse_lightcurve(text: &str) -> Result<Vec<Row>> {
 /// run writing again from its checkpoint), the earlier rows from that time on are dropped.
 /// Returns the rows and how many were dropped.
 pub fn supersede(rows: &[Row]) -> (Vec<Row>, usize) {
-    let mut kept: Vec<Row> = Vec::with_capacity(rows.len());
-    for r in rows {
-        while kept.last().is_some_and(|last| last.t >= r.t) {
-            kept.pop();
-        }
-        kept.push(*r);
-    }
+    let kept = crate::io::timeseries::supersede(rows.iter().copied(), |r| r.t);
     let dropped = rows.len() - kept.len();
     (kept, dropped)
 }

@@ -70,21 +70,15 @@ pub struct MonitorRow {
 /// latest pass through each time (a resumed run).
 pub fn parse_monitor(text: &str) -> Result<Vec<MonitorRow>> {
     let rows =
-        crate::io::timeseries::parse_series(text, crate::io::timeseries::MONITOR_HEADER, false)?;
-    let mut kept: Vec<MonitorRow> = Vec::with_capacity(rows.len());
-    for v in rows {
-        let r = MonitorRow {
-            t: v[0],
-            disk_mass: v[4],
-            r_disk: v[5],
-            hot_mass: v[10],
-        };
-        while kept.last().is_some_and(|l| l.t >= r.t) {
-            kept.pop();
-        }
-        kept.push(r);
-    }
-    Ok(kept)
+        crate::io::timeseries::parse_series(text, crate::io::timeseries::MONITOR_HEADER, false)?
+            .into_iter()
+            .map(|v| MonitorRow {
+                t: v[0],
+                disk_mass: v[4],
+                r_disk: v[5],
+                hot_mass: v[10],
+            });
+    Ok(crate::io::timeseries::supersede(rows, |r| r.t))
 }
 
 /// One outburst.

@@ -93,9 +93,9 @@ pub struct ModesRow {
 /// writing) is ignored; rows whose time does not increase replace the earlier rows from
 /// that time on (a resumed run).
 pub fn parse_modes(text: &str) -> Result<Vec<ModesRow>> {
-    let mut rows: Vec<ModesRow> = Vec::new();
-    for v in crate::io::timeseries::parse_series(text, HEADER, true)? {
-        let row = ModesRow {
+    let rows = crate::io::timeseries::parse_series(text, HEADER, true)?
+        .into_iter()
+        .map(|v| ModesRow {
             t: v[0],
             r_disk: v[2],
             m1: v[4],
@@ -103,13 +103,8 @@ pub fn parse_modes(text: &str) -> Result<Vec<ModesRow>> {
             m2: v[6],
             e: v[8],
             periastron_inertial_deg: v[10],
-        };
-        while rows.last().is_some_and(|last| last.t >= row.t) {
-            rows.pop();
-        }
-        rows.push(row);
-    }
-    Ok(rows)
+        });
+    Ok(crate::io::timeseries::supersede(rows, |r| r.t))
 }
 
 /// The eccentricity's growth, saturation and (where the disk shrinks) decay.

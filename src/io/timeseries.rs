@@ -64,6 +64,20 @@ impl Series {
     }
 }
 
+/// The rows as the run finally had them: wherever the time `t` does not increase (a
+/// resumed run writing again from its checkpoint), the earlier rows from that time on are
+/// dropped.
+pub fn supersede<T>(rows: impl IntoIterator<Item = T>, t: impl Fn(&T) -> f64) -> Vec<T> {
+    let mut kept: Vec<T> = Vec::new();
+    for r in rows {
+        while kept.last().is_some_and(|last| t(last) >= t(&r)) {
+            kept.pop();
+        }
+        kept.push(r);
+    }
+    kept
+}
+
 /// Parses the text of a series written by [`Series`]: the header must be `header`; each
 /// row has one number per column (`allow_nan`: NaN cells, for values a row may lack — but
 /// never in the first column, the time; never infinities). A last line without its newline that does not parse is a row a running
