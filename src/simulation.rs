@@ -1108,12 +1108,20 @@ fn write_series<const D: usize>(
     team.sum(&mut hist);
     let r_disk = problems::cv::histogram_radius(&hist, 0.9);
     let disk_mass: f64 = hist.iter().sum();
-    let l = problems::cv::luminosities(b, p, r_disk, support);
+    let l = problems::cv::luminosities(b, p, r_disk, support, st.t);
     let hot = phys.outbursts.map_or(0.0, |o| o.hot_mass(p, &phys.eos).0);
-    let mut v = vec![l[0], l[1], l[2], p.len() as f64, p.mass.iter().sum(), hot];
+    let mut v = vec![
+        l[0],
+        l[1],
+        l[2],
+        p.len() as f64,
+        p.mass.iter().sum(),
+        hot,
+        l[3],
+    ];
     team.sum(&mut v);
     let orbit = st.t / std::f64::consts::TAU;
-    series[0].row(&[st.t, orbit, v[0] + v[1] + v[2], v[0], v[1], v[2]])?;
+    series[0].row(&[st.t, orbit, v[0] + v[1] + v[2], v[0], v[1], v[2], v[6]])?;
     let f = &st.budget;
     series[1].row(&[
         st.t,

@@ -34,14 +34,16 @@ fn light_curve_csv(
     mut row: impl FnMut(f64, &mut Rng) -> (f64, f64, f64),
 ) -> String {
     let mut rng = Rng::new(seed);
-    let mut csv = String::from("t,orbit,l_total,l_disk,l_stream,l_spot\n");
+    let mut csv = String::from("t,orbit,l_total,l_disk,l_stream,l_spot,l_observed\n");
     let mut t = 0.0f64;
     while t < span {
         let (disk, stream, spot) = row(t, &mut rng);
         let total = disk + stream + spot;
+        // What the observer sees: an orbital hump of 20% peaking at phase 0.8.
+        let observed = 2.0 * (1.0 + 0.2 * (TAU * (t / TAU - 0.8)).cos());
         let _ = writeln!(
             csv,
-            "{t:e},{:e},{total:e},{disk:e},{stream:e},{spot:e}",
+            "{t:e},{:e},{total:e},{disk:e},{stream:e},{spot:e},{observed:e}",
             t / TAU
         );
         t += 0.02 + 0.08 * rng.uniform();
@@ -85,9 +87,25 @@ fn a_light_curve_gives_its_period_pictures_and_json() {
     assert!(num("amplitude_rel_err") > 0.0 && num("amplitude_rel_err") < 0.003);
     assert!((num("trend_start") - 2.4).abs() < 0.1 && (num("trend_end") - 2.4).abs() < 0.1);
     assert!(out.contains("trend: polynomial of degree 3"), "{out}");
-    for png in ["lightcurve.png", "periodogram.png"] {
+    for png in ["lightcurve.png", "periodogram.png", "orbital.png"] {
         assert!(is_png(&dir.path().join(png)), "{png}");
     }
+    // The observed column's orbital hump: period P_orb (a noiseless sinusoid: the error is
+    // round-off), maximum at phase 0.8 to half a bin (bins of 0.02), height over the median
+    // 2.5 log10(1.2) = 0.198 mag and the minimum at 0.3, 2.5 log10(1/0.8) = 0.242 mag under
+    // it (the median of 1 + 0.2 cos over the bins is 1 to 1e-3: 0.002 mag).
+    let o = &json["orbital"];
+    let onum = |k: &str| o[k].as_f64().unwrap_or_else(|| panic!("{k} in {o}"));
+    assert!((onum("period_orbits") - 1.0).abs() < 1e-4, "{o}");
+    assert!((onum("hump_phase") - 0.8).abs() <= 0.011, "{o}");
+    assert!((onum("minimum_phase") - 0.3).abs() <= 0.011, "{o}");
+    assert!((onum("hump_mag") - 0.198).abs() < 0.004, "{o}");
+    assert!((onum("minimum_depth_mag") - 0.242).abs() < 0.004, "{o}");
+    assert!(o["inclination_deg"].is_null(), "no run.toml: {o}");
+    assert!(
+        out.contains("orbital hump at phase 0.79") || out.contains("orbital hump at phase 0.81"),
+        "{out}"
+    );
 }
 
 /// 10 orbits of a disk that doubles linearly, modulated at 1.05 P_orb with a 3% semi-amplitude

@@ -54,7 +54,11 @@ fn synthetic_run(dir: &Path, q: f64, seed: u64) {
         let beat = (1.0 - RATE) * t;
         let disk =
             (1.0 + 0.002 * orbit) * (1.0 + 0.04 * (e / E_SAT) * beat.cos()) + 0.02 * rng.normal();
-        let _ = writeln!(light, "{t:e},{orbit:e},{:e},{disk:e},0e0,0.1e0", disk + 0.1);
+        let _ = writeln!(
+            light,
+            "{t:e},{orbit:e},{:e},{disk:e},0e0,0.1e0,0e0",
+            disk + 0.1
+        );
     }
     std::fs::write(dir.join("modes.csv"), modes).unwrap();
     std::fs::write(dir.join("lightcurve.csv"), light).unwrap();

@@ -38,7 +38,9 @@
 //!
 //! Writes into the run folder: `lightcurve.png` (luminosities against orbit with the trend;
 //! l_total less the trend, relative to the trend's mean, folded on the period with the
-//! fit), `periodogram.png` (power against period in P_orb, peak marked), `lightcurve.json`
+//! fit), `periodogram.png` (power against period in P_orb, peak marked), `orbital.png`
+//! (what the observer at `binary.inclination` sees, `l_observed` over its trend folded on
+//! the orbit: the orbital hump and the eclipse; [`orbital`]), `lightcurve.json`
 //! ([`LightcurveFigures`]). `run.toml` is optional: with
 //! `binary.period_days` the period is also given in days, with `binary.q` (or the masses)
 //! the period excess Patterson et al. (2005) predict for superhumps, ε = 0.18 q + 0.29 q².
@@ -72,7 +74,8 @@ pub const PERIOD_MAX_ORBITS: f64 = 5.0;
 /// (see the module's documentation).
 pub const TREND_DEGREE: usize = 3;
 
-/// One line of `lightcurve.csv`: code time, orbits, Σ m ε̇ in each region.
+/// One line of `lightcurve.csv`: code time, orbits, Σ m ε̇ in each region, and what the
+/// binary's observer sees (`analysis::observer`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Row {
     pub t: f64,
@@ -81,7 +84,62 @@ pub struct Row {
     pub l_disk: f64,
     pub l_stream: f64,
     pub l_spot: f64,
+    pub l_observed: f64,
 }
+
+/// Which column of the light curve is analysed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Signal {
+    /// l_total: the luminosity, the same in every direction.
+    Total,
+    /// l_observed: what the observer at `binary.inclination` sees.
+    Observed,
+}
+
+impl Signal {
+    fn of(self, r: &Row) -> f64 {
+        match self {
+            Signal::Total => r.l_total,
+            Signal::Observed => r.l_observed,
+        }
+    }
+}
+
+/// Number of orbital-phase bins of the observed light curve's folded profile: 50 per
+/// orbit, the run's default row interval, so that every bin holds one row per orbit.
+pub const PHASE_BINS: usize = 50;
+
+/// The orbital modulation an observer sees (`l_observed`): its periodogram between
+/// [`ORBITAL_RANGE`] P_orb, and the mean profile folded on the orbit.
+#[derive(Clone, Debug, Serialize)]
+pub struct OrbitalFigures {
+    /// `binary.inclination` of `run.toml` (degrees), if given there.
+    pub inclination_deg: Option<f64>,
+    /// The strongest period of l_observed in [`ORBITAL_RANGE`], in P_orb, its error, and
+    /// (P − P_orb)/P_orb.
+    pub period_orbits: f64,
+    pub period_orbits_err: f64,
+    pub period_offset: f64,
+    pub power: f64,
+    pub false_alarm: f64,
+    /// Semi-amplitude of the fitted sinusoid over the trend's mean.
+    pub amplitude_rel: Option<f64>,
+    /// The folded profile: l_observed over its trend, averaged in [`PHASE_BINS`] bins of
+    /// orbital phase (0 = the donor in front), as (bin centre, mean); empty bins left out.
+    pub profile: Vec<(f64, f64)>,
+    /// Phase of the profile's brightest bin (the orbital hump) and its height over the
+    /// profile's median in magnitudes.
+    pub hump_phase: f64,
+    pub hump_mag: f64,
+    /// Phase of the faintest bin and its depth under the median in magnitudes (the
+    /// eclipse, where the inclination gives one).
+    pub minimum_phase: f64,
+    /// `None` where the faintest bin holds no light at all.
+    pub minimum_depth_mag: Option<f64>,
+}
+
+/// The periods searched for the orbital modulation, in P_orb.
+pub const ORBITAL_RANGE: (f64, f64) = (0.5, 2.0);
 
 /// The binary's physical values, where `run.toml` gives them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -147,6 +205,9 @@ pub struct LightcurveFigures {
     pub trend_end: f64,
     /// `run.toml`'s binary, if any (set by [`analyse_lightcurve`], not by [`analyse`]).
     pub binary: Option<BinaryFigures>,
+    /// The orbital hump and eclipse in what the observer sees (set by
+    /// [`analyse_lightcurve`] through [`orbital`] where l_observed is not all 0).
+    pub orbital: Option<OrbitalFigures>,
     /// Caveats, one line each.
     pub notes: Vec<String>,
     /// The full estimate in code units.
@@ -186,6 +247,7 @@ pub fn parse_lightcurve(text: &str) -> Result<Vec<Row>> {
             l_disk: v[3],
             l_stream: v[4],
             l_spot: v[5],
+            l_observed: v[6],
         })
         .collect())
 }
@@ -220,6 +282,17 @@ pub fn analyse_range(
     detrend: bool,
     range: (f64, f64),
 ) -> Result<LightcurveFigures> {
+    analyse_signal(rows, skip_orbits, detrend, range, Signal::Total)
+}
+
+/// [`analyse_range`] of the column `signal`.
+pub fn analyse_signal(
+    rows: &[Row],
+    skip_orbits: f64,
+    detrend: bool,
+    range: (f64, f64),
+    signal: Signal,
+) -> Result<LightcurveFigures> {
     if !(range.0 >= 0.05 && range.1 > range.0 && range.1 <= 50.0) {
         bail!(
             "period range {}..{} P_orb: must lie within 0.05..50 and be increasing",
@@ -248,7 +321,7 @@ pub fn analyse_range(
         );
     }
     let t: Vec<f64> = used.iter().map(|r| r.t).collect();
-    let y: Vec<f64> = used.iter().map(|r| r.l_total).collect();
+    let y: Vec<f64> = used.iter().map(|r| signal.of(r)).collect();
     let span = t[t.len() - 1] - t[0];
     if !(span > 0.0) {
         bail!("the rows used cover no time");
@@ -257,7 +330,11 @@ pub fn analyse_range(
     let degree = if detrend { TREND_DEGREE } else { 0 };
     let grid = frequency_grid(span, f_min, f_max, OVERSAMPLE)?;
     let power = lomb_scargle_grid_trend(&t, &y, &grid, degree);
-    let est = refine_peak_trend(&t, &y, &grid, &power, degree).context("l_total")?;
+    let name = match signal {
+        Signal::Total => "l_total",
+        Signal::Observed => "l_observed",
+    };
+    let est = refine_peak_trend(&t, &y, &grid, &power, degree).context(name)?;
     let periodogram: Vec<(f64, f64)> = (0..grid.len)
         .map(|k| (1.0 / (grid.frequency(k) * TAU), power[k]))
         .collect();
@@ -334,11 +411,73 @@ pub fn analyse_range(
         trend_start,
         trend_end,
         binary: None,
+        orbital: None,
         notes,
         fit: est,
         periodogram,
         first_used,
     })
+}
+
+/// The orbital modulation of l_observed over the same rows as `analyse` would use: its
+/// strongest period in [`ORBITAL_RANGE`] against a cubic trend, and the profile folded on
+/// P_orb relative to that trend. `None` where l_observed is 0 throughout (a light curve
+/// without dissipation).
+pub fn orbital(
+    rows: &[Row],
+    skip_orbits: f64,
+    inclination_deg: Option<f64>,
+) -> Result<Option<OrbitalFigures>> {
+    if rows.iter().all(|r| r.l_observed == 0.0) {
+        return Ok(None);
+    }
+    let f = analyse_signal(rows, skip_orbits, true, ORBITAL_RANGE, Signal::Observed)?;
+    let (kept, _) = supersede(rows);
+    let used = &kept[f.first_used..];
+    let mean = f.fit.mean;
+    let mut sums = [(0.0, 0usize); PHASE_BINS];
+    for r in used {
+        let trend = f.fit.trend.at(r.t);
+        if !(trend > 0.0) {
+            continue;
+        }
+        let phase = (r.t / TAU).rem_euclid(1.0);
+        let k = ((phase * PHASE_BINS as f64) as usize).min(PHASE_BINS - 1);
+        sums[k].0 += r.l_observed / trend;
+        sums[k].1 += 1;
+    }
+    let profile: Vec<(f64, f64)> = sums
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.1 > 0)
+        .map(|(k, s)| ((k as f64 + 0.5) / PHASE_BINS as f64, s.0 / s.1 as f64))
+        .collect();
+    if profile.is_empty() {
+        bail!("l_observed: its trend is not positive anywhere; no profile");
+    }
+    let mut values: Vec<f64> = profile.iter().map(|p| p.1).collect();
+    values.sort_by(f64::total_cmp);
+    let median = values[values.len() / 2];
+    let max = profile.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1));
+    let min = profile.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1));
+    let (Some(max), Some(min)) = (max, min) else {
+        bail!("l_observed: no profile");
+    };
+    let mag = |a: f64, b: f64| 2.5 * (a / b).log10();
+    Ok(Some(OrbitalFigures {
+        inclination_deg,
+        period_orbits: f.period_orbits,
+        period_orbits_err: f.period_orbits_err,
+        period_offset: f.period_orbits - 1.0,
+        power: f.power,
+        false_alarm: f.false_alarm,
+        amplitude_rel: (mean > 0.0).then(|| f.amplitude / mean),
+        profile,
+        hump_phase: max.0,
+        hump_mag: mag(max.1, median),
+        minimum_phase: min.0,
+        minimum_depth_mag: (min.1 > 0.0).then(|| mag(median, min.1)),
+    }))
 }
 
 impl LightcurveFigures {
@@ -392,6 +531,19 @@ pub(crate) fn binary_of(run: &Path) -> (Option<f64>, Option<f64>, Option<String>
     (q, num("period_days"), None)
 }
 
+/// `binary.inclination` of `run.toml`, read leniently (its default where the table has a
+/// binary without the key; `None` where there is no readable `run.toml` or no binary).
+fn inclination_of(run: &Path) -> Option<f64> {
+    let text = std::fs::read_to_string(run.join("run.toml")).ok()?;
+    let value: toml::Value = text.parse().ok()?;
+    let b = value.get("binary")?;
+    Some(
+        b.get("inclination")
+            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+            .unwrap_or(crate::analysis::observer::DEFAULT_INCLINATION_DEG),
+    )
+}
+
 /// Reads `run/lightcurve.csv` (and `run/run.toml` if there), analyses it ([`analyse`]),
 /// writes the two pictures and the JSON into `run`.
 pub fn analyse_lightcurve(run: &Path, skip_orbits: f64, detrend: bool) -> Result<LightcurveReport> {
@@ -402,20 +554,29 @@ pub fn analyse_lightcurve(run: &Path, skip_orbits: f64, detrend: bool) -> Result
     let (q, days, note) = binary_of(run);
     let mut figures = figures.with_binary(q, days);
     figures.notes.extend(note);
+    figures.orbital = orbital(&rows, skip_orbits, inclination_of(run))
+        .with_context(|| format!("{}: the observed light curve", csv.display()))?;
     let (rows, _) = supersede(&rows);
 
     let lc_png = run.join("lightcurve.png");
     plot_panels(&lc_png, (1800, 600), &lightcurve_panels(&rows, &figures))?;
     let pg_png = run.join("periodogram.png");
     plot_panels(&pg_png, (1100, 550), &[periodogram_panel(&figures)])?;
+    let mut files = vec![lc_png, pg_png];
+    if let Some(o) = &figures.orbital {
+        let png = run.join("orbital.png");
+        plot_panels(&png, (1100, 550), &[orbital_panel(o)])?;
+        files.push(png);
+    }
     let json = run.join("lightcurve.json");
     let mut text = serde_json::to_string_pretty(&figures)?;
     text.push('\n');
     write_atomic(&json, text.as_bytes())?;
+    files.push(json);
     Ok(LightcurveReport {
         csv,
         figures,
-        files: vec![lc_png, pg_png, json],
+        files,
     })
 }
 
@@ -562,6 +723,31 @@ pub(crate) fn lightcurve_panels(rows: &[Row], f: &LightcurveFigures) -> Vec<Pane
     ]
 }
 
+/// The observed light curve's profile folded on the orbit, two cycles.
+fn orbital_panel(o: &OrbitalFigures) -> Panel {
+    let mut points: Vec<(f64, f64)> = o.profile.clone();
+    points.extend(o.profile.iter().map(|p| (p.0 + 1.0, p.1)));
+    let inclination = o
+        .inclination_deg
+        .map_or(String::new(), |i| format!(" at i = {i}°"));
+    Panel {
+        title: format!(
+            "observed light{inclination} folded on P_orb (hump at phase {:.2}, {:.3} mag)",
+            o.hump_phase, o.hump_mag
+        ),
+        x_label: "orbital phase (0: donor in front)".into(),
+        y_label: "l_observed / trend".into(),
+        x_range: (0.0, 2.0),
+        y_range: padded_range(points.iter().map(|p| p.1)),
+        series: vec![Series {
+            label: Some(format!("{} phase bins", PHASE_BINS)),
+            points,
+            color: PALETTE[1],
+            style: SeriesStyle::Line,
+        }],
+    }
+}
+
 pub(crate) fn periodogram_panel(f: &LightcurveFigures) -> Panel {
     let top = f
         .periodogram
@@ -699,6 +885,22 @@ impl LightcurveReport {
             "modulation: {amp}; power {:.3}, false-alarm probability {fap}",
             f.power
         );
+        if let Some(o) = &f.orbital {
+            let incl = o
+                .inclination_deg
+                .map_or(String::new(), |i| format!(" (i = {i}°)"));
+            let depth = o
+                .minimum_depth_mag
+                .map_or("all light hidden".to_string(), |d| format!("{d:.3} mag"));
+            let _ = writeln!(
+                s,
+                "observed{incl}: period {} P_orb, orbital hump at phase {:.2} ({:.3} mag over the median), minimum at phase {:.2} ({depth} under it)",
+                plus_minus(o.period_orbits, o.period_orbits_err),
+                o.hump_phase,
+                o.hump_mag,
+                o.minimum_phase
+            );
+        }
         for n in &f.notes {
             let _ = writeln!(s, "note: {n}");
         }
@@ -728,6 +930,7 @@ mod tests {
                 l_disk: disk,
                 l_stream: stream,
                 l_spot: spot,
+                l_observed: 0.0,
             });
             t += 0.01 + 0.04 * rng.uniform();
         }
@@ -803,6 +1006,7 @@ mod tests {
                 l_disk: disk,
                 l_stream: 0.0,
                 l_spot: 0.0,
+                l_observed: 0.0,
             });
             t += 0.01 + 0.04 * rng.uniform();
         }
@@ -878,6 +1082,7 @@ mod tests {
                 l_disk: 1.0,
                 l_stream: 0.0,
                 l_spot: 0.0,
+                l_observed: 0.0,
             })
             .collect();
         let (kept, dropped) = supersede(&rows);
@@ -889,12 +1094,12 @@ mod tests {
     #[test]
     fn parse_errors_name_the_line() {
         // The header of the brief, which the run writes (io::timeseries).
-        assert_eq!(HEADER, "t,orbit,l_total,l_disk,l_stream,l_spot");
-        let ok = format!("{HEADER}\n0,0,1,1,0,0\n0.1,0.0159,1,1,0,0\n");
+        assert_eq!(HEADER, "t,orbit,l_total,l_disk,l_stream,l_spot,l_observed");
+        let ok = format!("{HEADER}\n0,0,1,1,0,0,0\n0.1,0.0159,1,1,0,0,0\n");
         assert_eq!(parse_lightcurve(&ok).unwrap().len(), 2);
         let e = parse_lightcurve("t,orbit,l_total\n0,0,1\n").unwrap_err();
         assert!(e.to_string().contains("header is `t,orbit,l_total`"), "{e}");
-        let e = parse_lightcurve(&format!("{HEADER}\n0,0,1,1,0,0\n0.1,0,x1,1,0,0\n"))
+        let e = parse_lightcurve(&format!("{HEADER}\n0,0,1,1,0,0,0\n0.1,0,x1,1,0,0,0\n"))
             .unwrap_err()
             .to_string();
         assert!(
@@ -903,13 +1108,13 @@ mod tests {
         );
         let e = parse_lightcurve(&format!("{HEADER}\n0,0,1,1,0\n")).unwrap_err();
         assert!(e.to_string().contains("line 2: 5 cells"), "{e}");
-        let e = parse_lightcurve(&format!("{HEADER}\n0,0,NaN,1,0,0\n")).unwrap_err();
+        let e = parse_lightcurve(&format!("{HEADER}\n0,0,NaN,1,0,0,0\n")).unwrap_err();
         assert!(e.to_string().contains("not a finite number"), "{e}");
         assert!(parse_lightcurve("").is_err());
         // Half a last row (the run is writing it) is left out; a whole one is not.
-        let partial = format!("{HEADER}\n0,0,1,1,0,0\n0.1,0.01");
+        let partial = format!("{HEADER}\n0,0,1,1,0,0,0\n0.1,0.01");
         assert_eq!(parse_lightcurve(&partial).unwrap().len(), 1);
-        let whole = format!("{HEADER}\r\n0,0,1,1,0,0\r\n0.1,0.01,1,1,0,0");
+        let whole = format!("{HEADER}\r\n0,0,1,1,0,0,0\r\n0.1,0.01,1,1,0,0,0");
         assert_eq!(parse_lightcurve(&whole).unwrap().len(), 2);
     }
 

@@ -5,6 +5,7 @@ pub mod advection;
 pub mod cv_report;
 pub mod disk_report;
 pub mod lightcurve_report;
+pub mod observer;
 pub mod outburst_report;
 pub mod periodogram;
 pub mod riemann;

@@ -592,6 +592,7 @@ mod tests {
                 l_disk: l,
                 l_stream: 0.0,
                 l_spot: 0.0,
+                l_observed: 0.0,
             });
             monitor.push(MonitorRow {
                 t,

@@ -136,8 +136,11 @@ fn parse_row(line: &str, names: &[&str], allow_nan: bool) -> anyhow::Result<Vec<
 /// summed over every rank's particles (unused momentum components 0).
 pub const STATISTICS_HEADER: &str = "t,step,dt,particles,mass,accreted_mass,kinetic_energy,internal_energy,potential_energy,total_energy,px,py,pz,angular_momentum";
 
-/// Header of `lightcurve.csv`.
-pub const LIGHTCURVE_HEADER: &str = "t,orbit,l_total,l_disk,l_stream,l_spot";
+/// Header of `lightcurve.csv`: Σ m ε̇ in all, in the disk, the stream and the bright spot
+/// (`physics::binary::Region`), and what an observer at `binary.inclination` sees of it
+/// (`analysis::observer`: foreshortened, the spot only from the rim's side facing the
+/// observer, eclipsed by the donor).
+pub const LIGHTCURVE_HEADER: &str = "t,orbit,l_total,l_disk,l_stream,l_spot,l_observed";
 /// Header of `modes.csv`: the disk's m = 1 and m = 2 modes and mean eccentricity in the
 /// window [0.5, 1.0) R90 (`problems::cv::DiskModes`), the longitude of periastron in the
 /// turning frame and in the inertial frame (whose slope is the precession rate).

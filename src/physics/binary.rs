@@ -19,6 +19,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::analysis::observer::Observer;
 use crate::analysis::roche;
 use crate::physics::gravity::PointMass;
 
@@ -50,6 +51,15 @@ pub struct BinaryParams {
     /// Particles farther than this from the centre of mass have escaped (default 2.5 a).
     #[serde(default = "default_escape_radius")]
     pub escape_radius: f64,
+    /// The observer's inclination in degrees (0 pole-on, 90 in the orbital plane) for the
+    /// light curve's `l_observed` column (`analysis::observer`; default 60, the median of
+    /// randomly oriented orbits).
+    #[serde(default = "default_inclination")]
+    pub inclination: f64,
+}
+
+fn default_inclination() -> f64 {
+    crate::analysis::observer::DEFAULT_INCLINATION_DEG
 }
 
 fn default_accretor_radius() -> f64 {
@@ -69,6 +79,7 @@ impl BinaryParams {
             period_days: None,
             accretor_radius: default_accretor_radius(),
             escape_radius: default_escape_radius(),
+            inclination: default_inclination(),
         }
     }
 
@@ -147,6 +158,12 @@ impl BinaryParams {
                  (L1 lies {d:.4} a from it at q = {q}), got {r}"
             ));
         }
+        let i = self.inclination;
+        if !(0.0..=90.0).contains(&i) {
+            return Err(format!(
+                "key `binary.inclination`: degrees from 0 (pole-on) to 90 (edge-on), got {i}"
+            ));
+        }
         let e = self.escape_radius;
         if !(e > 1.0 && e.is_finite() && e <= 1e3) {
             return Err(format!(
@@ -167,6 +184,8 @@ pub struct Binary {
     pub omega: f64,
     pub accretor_radius: f64,
     pub escape_radius: f64,
+    /// The observer of the light curve's `l_observed` (`binary.inclination`).
+    pub observer: Observer,
 }
 
 impl Binary {
@@ -178,6 +197,7 @@ impl Binary {
             omega: 1.0,
             accretor_radius: params.accretor_radius,
             escape_radius: params.escape_radius,
+            observer: Observer::new(q, params.inclination.to_radians()),
         }
     }
 
@@ -439,6 +459,7 @@ mod tests {
             period_days: Some(0.0631209),
             accretor_radius: 0.01,
             escape_radius: 2.5,
+            inclination: 83.3,
         };
         assert!(p.validate(3).is_ok());
         let u = p.physical_units().unwrap();
@@ -459,6 +480,7 @@ mod tests {
             period_days: None,
             accretor_radius: 0.01,
             escape_radius: 2.5,
+            inclination: 83.3,
         };
         assert!(p.validate(2).unwrap_err().contains("binary.q"));
         p.q = Some(0.1);
@@ -469,6 +491,12 @@ mod tests {
                 .contains("binary.accretor_radius")
         );
         p.accretor_radius = 0.01;
+        for bad in [-1.0, 91.0, f64::NAN] {
+            p.inclination = bad;
+            assert!(p.validate(2).unwrap_err().contains("binary.inclination"));
+        }
+        p.inclination = 90.0;
+        assert!(p.validate(2).is_ok());
         assert!(p.validate(1).unwrap_err().contains("dimension"));
         p.m1_msun = Some(0.7);
         assert!(p.validate(2).unwrap_err().contains("not both"));

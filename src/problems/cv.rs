@@ -13,6 +13,7 @@ use std::collections::BTreeMap;
 
 use anyhow::{Result, bail};
 
+use crate::analysis::observer::Surface;
 use crate::analysis::roche;
 use crate::boundary::BoundaryKind;
 use crate::config::Config;
@@ -278,21 +279,31 @@ pub fn histogram_radius(hist: &[f64], fraction: f64) -> f64 {
 }
 
 /// Luminosity Σ m ε̇ of the disk, the stream and the spot (module doc of
-/// `physics::binary::Region`), for a disk of radius `r_disk`.
+/// `physics::binary::Region`), for a disk of radius `r_disk`, and what the binary's
+/// observer sees of it at time `t` (`analysis::observer`: disk gas through the disk's
+/// faces, spot gas through the rim, stream gas isotropically; eclipsed by the donor).
 pub fn luminosities<const D: usize>(
     b: &Binary,
     p: &Particles<D>,
     r_disk: f64,
     support: f64,
-) -> [f64; 3] {
-    let mut l = [0.0; 3];
+    t: f64,
+) -> [f64; 4] {
+    let o = b.observer.direction(b.omega * t / std::f64::consts::TAU);
+    let mut l = [0.0; 4];
     for i in 0..p.len() {
-        let k = match b.region(&p.position(i), &p.velocity(i), r_disk, support) {
-            Region::Disk => 0,
-            Region::Stream => 1,
-            Region::Spot => 2,
+        let x = p.position(i);
+        let (k, surface) = match b.region(&x, &p.velocity(i), r_disk, support) {
+            Region::Disk => (0, Surface::Face),
+            Region::Stream => (1, Surface::Isotropic),
+            Region::Spot => (2, Surface::Rim),
         };
-        l[k] += p.mass[i] * p.diss[i];
+        let li = p.mass[i] * p.diss[i];
+        l[k] += li;
+        if li != 0.0 {
+            let x3 = std::array::from_fn(|d| if d < D { x[d] } else { 0.0 });
+            l[3] += li * b.observer.visibility(x3, surface, o);
+        }
     }
     l
 }
