@@ -13,6 +13,7 @@ pub mod integrate;
 pub mod io;
 pub mod kernel;
 pub mod limits;
+pub mod memory;
 pub mod particles;
 pub mod physics;
 pub mod problems;

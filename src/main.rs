@@ -213,6 +213,7 @@ enum WindowArg {
 }
 
 fn main() -> ExitCode {
+    sphdisk::memory::keep_freed_memory();
     let cli = Cli::parse();
     match real_main(cli) {
         Ok(()) => ExitCode::SUCCESS,
