@@ -134,12 +134,10 @@ impl Snapshot {
     pub fn validate(&self) -> Result<()> {
         let names = ["x", "y", "z"];
         for a in 0..3 {
-            if !(self.box_hi[a].is_finite() && self.box_lo[a].is_finite())
-                || !(self.box_hi[a] > self.box_lo[a])
-            {
+            let side = self.box_hi[a] - self.box_lo[a];
+            if !(side > 0.0 && side.is_finite()) {
                 bail!(
-                    "Header/BoxSize: side {} along {} is not a positive number",
-                    self.box_hi[a] - self.box_lo[a],
+                    "Header/BoxSize: side {side} along {} is not a positive number",
                     names[a]
                 );
             }
