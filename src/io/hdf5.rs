@@ -561,7 +561,7 @@ pub fn read_snapshot(path: &Path) -> Result<Snapshot> {
 }
 
 /// [`read_snapshot`] for a picture or an analysis, which interpolate with each particle's
-/// smoothing length: also refuses a snapshot without gas or with an h that is not > 0.
+/// smoothing length: also refuses an h that is not > 0.
 pub fn read_snapshot_with_h(path: &Path) -> Result<Snapshot> {
     let snap = read_snapshot(path)?;
     snap.validate_for_interpolation()

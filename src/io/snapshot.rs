@@ -192,9 +192,6 @@ impl Snapshot {
     /// picture or an analysis interpolates with.
     pub fn validate_for_interpolation(&self) -> Result<()> {
         self.validate()?;
-        if self.is_empty() {
-            bail!("PartType0: no gas particles");
-        }
         if let Some(i) = self.h.iter().position(|&h| !(h > 0.0)) {
             bail!(
                 "PartType0/SmoothingLengths: particle {} has {}, expected > 0",
