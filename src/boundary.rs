@@ -59,7 +59,7 @@ impl<const D: usize> SimBox<D> {
             }
             if self.kinds[d] != BoundaryKind::Open && l < 2.0 * support {
                 bail!(
-                    "domain: the box is too small for the kernel along {}: length {} < {} \
+                    "the box is too small for the kernel along {}: length {} < {} \
                      (two kernel supports, support = 2h = {}); use a smaller h or a larger box",
                     AXES[d],
                     l,

@@ -416,6 +416,10 @@ pub struct InitialFileParams {
     pub file: String,
 }
 
+/// Levels of a dotted `--set` key (`sod.left.rho` has 3); deeper keys name no setting and
+/// would nest tables without bound.
+const MAX_KEY_LEVELS: usize = 8;
+
 /// Applies `key=value` to a TOML table, creating intermediate tables. The value is parsed as
 /// TOML (number, boolean, array, quoted string); a bare word is taken as a string.
 pub fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<()> {
@@ -426,6 +430,13 @@ pub fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<()> {
     let raw = raw.trim();
     if key.is_empty() || key.split('.').any(str::is_empty) {
         bail!("--set: malformed key `{key}`");
+    }
+    let levels = key.split('.').count();
+    if levels > MAX_KEY_LEVELS {
+        let shown: String = key.chars().take(40).collect();
+        bail!(
+            "--set: key `{shown}…` has {levels} levels; problem-file keys have at most {MAX_KEY_LEVELS}"
+        );
     }
     let value = match format!("v = {raw}").parse::<toml::Table>() {
         Ok(mut t) => t.remove("v").expect("parsed key"),
@@ -482,8 +493,9 @@ impl Config {
     /// Deserialises and validates a table; unknown keys, missing keys and bad values are
     /// reported with their dotted path.
     pub fn from_table(table: toml::Table) -> Result<Self> {
-        let cfg: Config =
-            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+        check_finite("", &table)?;
+        let cfg: Config = serde_path_to_error::deserialize(toml::Value::Table(table.clone()))
+            .map_err(|e| {
                 let path = e.path().to_string();
                 // toml appends "\nin `table`"; the dotted path says it already.
                 let inner = e.into_inner().to_string();
@@ -494,6 +506,9 @@ impl Config {
                     anyhow::anyhow!("key `{path}`: {inner}")
                 }
             })?;
+        if let Ok(toml::Value::Table(read)) = toml::Value::try_from(&cfg) {
+            check_shapes("", &table, &read)?;
+        }
         cfg.validate()?;
         Ok(cfg)
     }
@@ -737,6 +752,16 @@ impl Config {
         Ok(())
     }
 
+    /// The key with the largest magnitude among the numbers of the problem (beside
+    /// `[units]`, whose cgs factors are large by nature), for a message about an overflow.
+    pub fn largest_value(&self) -> Option<(String, f64)> {
+        self.flattened()
+            .into_iter()
+            .filter(|(k, _)| !k.starts_with("units.") && !k.starts_with("particles.seed"))
+            .filter_map(|(k, v)| v.parse::<f64>().ok().map(|x| (k, x)))
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+    }
+
     /// The problem file as it was run (after overrides), flattened to dotted keys.
     pub fn flattened(&self) -> BTreeMap<String, String> {
         let mut out = BTreeMap::new();
@@ -744,6 +769,56 @@ impl Config {
         flatten("", &value, &mut out);
         out
     }
+}
+
+/// Refuses a number that is not finite (`nan`, `inf`) anywhere in `t`, naming its key: no
+/// setting takes one (leave a key out for its default).
+fn check_finite(prefix: &str, t: &toml::Table) -> Result<()> {
+    fn walk(key: &str, v: &toml::Value) -> Result<()> {
+        match v {
+            toml::Value::Float(x) if !x.is_finite() => {
+                bail!("key `{key}`: must be a finite number, got {x}")
+            }
+            toml::Value::Table(t) => check_finite(key, t),
+            toml::Value::Array(a) => a.iter().try_for_each(|x| walk(key, x)),
+            _ => Ok(()),
+        }
+    }
+    for (k, v) in t {
+        let key = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        walk(&key, v)?;
+    }
+    Ok(())
+}
+
+/// Refuses an array in `given` where the schema reads a table (`read`, the configuration
+/// serialised back): serde takes `sod.left = [1, 2]` as the fields in order (ρ = 1,
+/// p = 2), which nobody means.
+fn check_shapes(prefix: &str, given: &toml::Table, read: &toml::Table) -> Result<()> {
+    for (k, v) in given {
+        let key = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        match (v, read.get(k)) {
+            (toml::Value::Array(a), Some(toml::Value::Table(t))) => {
+                let fields: Vec<&str> = t.keys().map(String::as_str).collect();
+                bail!(
+                    "key `{key}`: expected a table {{ {} }}, got an array of {} values",
+                    fields.join(", "),
+                    a.len()
+                );
+            }
+            (toml::Value::Table(g), Some(toml::Value::Table(r))) => check_shapes(&key, g, r)?,
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// Joins a multi-line message into one line.
@@ -835,6 +910,38 @@ mod tests {
         assert!(e.contains("[sedov]"), "{e}");
         let e = load(SOD, &["boundary.z=open"]).unwrap_err().to_string();
         assert!(e.contains("boundary.z"), "{e}");
+    }
+
+    #[test]
+    fn a_table_given_as_an_array_is_named() {
+        let text = format!("{SOD}\n[sod]\nleft = [1.0, 2.0]\n");
+        let e = load(&text, &[]).unwrap_err().to_string();
+        assert!(e.contains("sod.left") && e.contains("table"), "{e}");
+        let e = load(SOD, &["sod.right=[0.125, 0.1, 0.0]"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("sod.right") && e.contains("array"), "{e}");
+        assert!(load(SOD, &["sod.left={ rho = 1.0, p = 2.0 }"]).is_ok());
+    }
+
+    #[test]
+    fn infinities_and_nans_are_refused_by_key() {
+        for (set, key) in [
+            ("ring.tau_end=inf", "ring.tau_end"),
+            ("sod.left.rho=nan", "sod.left.rho"),
+            ("sod.window=[0.1, inf]", "sod.window"),
+            ("time.end=-inf", "time.end"),
+        ] {
+            let e = load(SOD, &[set]).unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains("finite"), "{set}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_deeply_dotted_key_is_refused_by_its_depth() {
+        let key = vec!["a"; 60_000].join(".");
+        let e = load(SOD, &[&format!("{key}=1")]).unwrap_err().to_string();
+        assert!(e.contains("--set") && e.contains("60000 levels"), "{e}");
     }
 
     #[test]

@@ -29,7 +29,10 @@ pub fn lattice_count<const D: usize>(counts: [usize; D]) -> Result<usize> {
         .try_fold(1u64, |a, &c| a.checked_mul(c as u64))
         .filter(|&t| t <= MAX_PARTICLES);
     match total {
-        Some(t) => Ok(t as usize),
+        Some(t) => {
+            check_memory::<D>(t, "particles.n")?;
+            Ok(t as usize)
+        }
         None => {
             let shape: Vec<String> = counts.iter().map(|c| c.to_string()).collect();
             bail!(
@@ -40,8 +43,77 @@ pub fn lattice_count<const D: usize>(counts: [usize; D]) -> Result<usize> {
     }
 }
 
+/// The environment variable that sets the memory a run may use (bytes, or with a suffix
+/// K, M, G, T: `SPHDISK_MEMORY_LIMIT=64G`), instead of the machine's available memory.
+pub const MEMORY_LIMIT_VAR: &str = "SPHDISK_MEMORY_LIMIT";
+
+/// Bytes one particle of a `D`-dimensional run costs, about: its arrays (`Particles`:
+/// 3D + D² + 9 numbers, an id and a counter), three times over (the state, the sweep's
+/// working copy with ghosts, the copy gathered for outputs), and its share of the
+/// neighbour grid's index.
+pub fn bytes_per_particle<const D: usize>() -> u64 {
+    let arrays = (3 * D + D * D + 9) as u64 * 8 + 12;
+    3 * arrays + 64
+}
+
+/// The memory a run may use: `SPHDISK_MEMORY_LIMIT` if set, else `MemAvailable` of
+/// /proc/meminfo; None where neither is known (then nothing is refused).
+pub fn memory_available() -> Result<Option<u64>> {
+    if let Ok(text) = std::env::var(MEMORY_LIMIT_VAR) {
+        return parse_bytes(&text).map(Some).ok_or_else(|| {
+            anyhow::anyhow!(
+                "{MEMORY_LIMIT_VAR}: expected bytes, optionally with K, M, G or T (e.g. 64G), got `{text}`"
+            )
+        });
+    }
+    let Ok(info) = std::fs::read_to_string("/proc/meminfo") else {
+        return Ok(None);
+    };
+    Ok(info
+        .lines()
+        .find_map(|l| l.strip_prefix("MemAvailable:"))
+        .and_then(|rest| rest.trim().strip_suffix("kB"))
+        .and_then(|kb| kb.trim().parse::<u64>().ok())
+        .map(|kb| kb.saturating_mul(1024)))
+}
+
+/// `123`, `4K`, `5M`, `6G`, `7T` (powers of 1024; a trailing `B` or `iB` allowed).
+fn parse_bytes(text: &str) -> Option<u64> {
+    let t = text.trim();
+    let t = t
+        .strip_suffix("iB")
+        .or_else(|| t.strip_suffix('B'))
+        .unwrap_or(t);
+    let (digits, shift) = match t.chars().last()? {
+        'K' | 'k' => (&t[..t.len() - 1], 10),
+        'M' | 'm' => (&t[..t.len() - 1], 20),
+        'G' | 'g' => (&t[..t.len() - 1], 30),
+        'T' | 't' => (&t[..t.len() - 1], 40),
+        _ => (t, 0),
+    };
+    digits.trim().parse::<u64>().ok()?.checked_mul(1 << shift)
+}
+
+/// Refuses `particles` particles of a `D`-dimensional run when their estimated memory
+/// ([`bytes_per_particle`]) exceeds [`memory_available`], naming `key` and both figures.
+pub fn check_memory<const D: usize>(particles: u64, key: &str) -> Result<()> {
+    let Some(available) = memory_available()? else {
+        return Ok(());
+    };
+    let need = particles.saturating_mul(bytes_per_particle::<D>());
+    if need > available {
+        let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+        bail!(
+            "key `{key}`: {particles} particles need about {:.2} GiB, more than the {:.2} GiB available (MemAvailable; set {MEMORY_LIMIT_VAR} to change): lower {key}",
+            gib(need),
+            gib(available)
+        );
+    }
+    Ok(())
+}
+
 /// The key that sets h in `cfg`, for messages.
-fn h_key(cfg: &Config) -> &'static str {
+pub fn h_key(cfg: &Config) -> &'static str {
     if cfg.particles.h.is_some() {
         "particles.h"
     } else {
@@ -137,6 +209,18 @@ mod tests {
             let e = lattice_count(counts).unwrap_err().to_string();
             assert!(e.contains("particles.n"), "{e}");
         }
+    }
+
+    #[test]
+    fn memory_sizes_parse_with_suffixes() {
+        assert_eq!(parse_bytes("123"), Some(123));
+        assert_eq!(parse_bytes("4K"), Some(4096));
+        assert_eq!(parse_bytes("2GiB"), Some(2 << 30));
+        assert_eq!(parse_bytes("1T"), Some(1 << 40));
+        assert_eq!(parse_bytes("lots"), None);
+        assert_eq!(parse_bytes("99999999999T"), None);
+        // 10⁹ particles in 3D are hundreds of GiB: more than any test machine has.
+        assert!(bytes_per_particle::<3>() * 1_000_000_000 > 500 << 30);
     }
 
     #[test]

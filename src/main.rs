@@ -48,7 +48,7 @@ enum Command {
         #[arg(long, value_name = "RUN_FOLDER")]
         resume: Option<PathBuf>,
         /// Stop after this many steps (counted from the run's start) with a checkpoint.
-        #[arg(long, value_name = "STEPS")]
+        #[arg(long, value_name = "STEPS", value_parser = clap::value_parser!(u64).range(1..))]
         stop_after: Option<u64>,
         /// No progress bar and no report on the terminal (run.log has it all).
         #[arg(long)]
@@ -78,8 +78,8 @@ enum Command {
         /// viridis or magma.
         #[arg(long)]
         colormap: Option<String>,
-        /// Largest pixel count along each axis.
-        #[arg(long, default_value_t = 800)]
+        /// Largest pixel count along each axis (2 to 16384).
+        #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(2..=16384))]
         resolution: u32,
         /// Fixed colour range `LO,HI` (default: from the data; one range for a whole movie).
         #[arg(long, value_name = "LO,HI")]
@@ -214,7 +214,25 @@ enum WindowArg {
 
 fn main() -> ExitCode {
     sphdisk::memory::keep_freed_memory();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                e.exit();
+            }
+            // One line, as every other error: clap's first, without its usage block.
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("bad command line");
+            eprintln!("error: {}", first.trim_start_matches("error: ").trim());
+            return ExitCode::from(2);
+        }
+    };
     match real_main(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -536,12 +554,13 @@ fn real_main(cli: Cli) -> Result<()> {
                 let frames = sphdisk::render::movie::render_run(&input, &opts, &out)?;
                 println!("wrote {} frames in {}", frames.len(), out.display());
             } else {
-                let snap = sphdisk::io::hdf5::read_snapshot(&input)?.in_run_frame();
+                let snap = sphdisk::io::hdf5::read_snapshot_with_h(&input)?.in_run_frame();
                 let out = out.unwrap_or_else(|| {
                     let stem = input.file_stem().unwrap_or_default().to_string_lossy();
                     input.with_file_name(format!("{stem}_{name}.png"))
                 });
-                let img = render_png(&snap, &opts, &out)?;
+                let img =
+                    render_png(&snap, &opts, &out).with_context(|| input.display().to_string())?;
                 println!(
                     "wrote {} ({} × {} pixels, colour range {:.4e} .. {:.4e})",
                     out.display(),

@@ -124,14 +124,17 @@ pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
 /// check of [`load_checkpoint`].
 pub fn resume_dimension(overrides: &[String], opts: &RunOptions) -> Result<usize> {
     let mut first_err = None;
-    for path in checkpoint::list(&opts.out)? {
+    let expected = run_folder::read_run_id(&opts.out)?;
+    let expected = expected.as_deref();
+    for (k, path) in checkpoint::list(&opts.out)?.into_iter().enumerate() {
         let usable = checkpoint::dimension(&path).and_then(|d| match d {
-            1 => load_checkpoint::<1>(&path, overrides).map(|_| 1),
-            2 => load_checkpoint::<2>(&path, overrides).map(|_| 2),
-            _ => load_checkpoint::<3>(&path, overrides).map(|_| 3),
+            1 => load_checkpoint::<1>(&path, overrides, expected).map(|_| 1),
+            2 => load_checkpoint::<2>(&path, overrides, expected).map(|_| 2),
+            _ => load_checkpoint::<3>(&path, overrides, expected).map(|_| 3),
         });
         match usable {
             Ok(d) => return Ok(d),
+            Err(e) if k == 0 && e.is::<ForeignRun>() => return Err(e),
             Err(e) => {
                 first_err.get_or_insert(e);
             }
@@ -155,6 +158,22 @@ fn no_checkpoint(opts: &RunOptions, newest_err: Option<anyhow::Error>) -> anyhow
     }
 }
 
+/// A checkpoint of another run than the one whose folder it lies in (its run id differs
+/// from the folder's `run.id`): never resumed from.
+#[derive(Debug)]
+struct ForeignRun(String);
+
+impl std::fmt::Display for ForeignRun {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ForeignRun {}
+
+/// Keys `--resume --set` may change: when and what the run writes, how far it goes.
+const RESUMABLE_KEYS: [&str; 3] = ["time.", "output.", "sweep."];
+
 /// A checkpoint read back and checked: its configuration (with `overrides`), loop state,
 /// particles and box.
 struct Resumable<const D: usize> {
@@ -169,7 +188,11 @@ struct Resumable<const D: usize> {
 /// parse, a time outside [0, t_end], a box that is not `D`-dimensional or too small for
 /// the kernel, h not a positive number, a particle with a mass or u out of range, a
 /// position or velocity not finite, a position outside the box, an id twice.
-fn load_checkpoint<const D: usize>(path: &Path, overrides: &[String]) -> Result<Resumable<D>> {
+fn load_checkpoint<const D: usize>(
+    path: &Path,
+    overrides: &[String],
+    run_id: Option<&str>,
+) -> Result<Resumable<D>> {
     let what = path.display();
     let (text, p) = checkpoint::read::<D>(path)?;
     let mut table: toml::Table = text
@@ -177,6 +200,12 @@ fn load_checkpoint<const D: usize>(path: &Path, overrides: &[String]) -> Result<
         .parse()
         .with_context(|| format!("{what}: stored configuration"))?;
     for o in overrides {
+        let key = o.split_once('=').map_or(o.as_str(), |(k, _)| k.trim());
+        if !RESUMABLE_KEYS.iter().any(|p| key.starts_with(p)) {
+            bail!(
+                "--set {key}: cannot change when a run is resumed (only time.*, output.* and sweep.* can); start a new run instead"
+            );
+        }
         crate::config::apply_override(&mut table, o)?;
     }
     let cfg = Config::from_table(table).with_context(|| format!("{what}: configuration"))?;
@@ -188,6 +217,20 @@ fn load_checkpoint<const D: usize>(path: &Path, overrides: &[String]) -> Result<
     }
     let mut st: LoopState = serde_json::from_str(&text.state_json)
         .with_context(|| format!("{what}: stored run state"))?;
+    if let Some(id) = run_id
+        && st.run_id != id
+    {
+        let theirs = if st.run_id.is_empty() {
+            "none".to_string()
+        } else {
+            st.run_id.clone()
+        };
+        return Err(ForeignRun(format!(
+            "{what} belongs to another run (run id {theirs}) than the one in its folder ({} says {id}): remove it, or resume the folder it came from",
+            run_folder::RUN_ID_FILE
+        ))
+        .into());
+    }
     if !(st.t_end > 0.0 && st.t_end.is_finite()) {
         bail!(
             "{what}: end time t_end = {} is not a positive number",
@@ -212,11 +255,25 @@ fn load_checkpoint<const D: usize>(path: &Path, overrides: &[String]) -> Result<
         crate::limits::check_grid(&cfg, &bx, st.h, &p.pos)
     })()
     .with_context(|| format!("{what}"))?;
-    if let Some(end) = cfg.time.end
-        && end != st.t_end
-    {
+    if !overrides.is_empty() {
+        // A new end or interval: the snapshots written stay; those to come follow the
+        // new settings.
+        let future = match &st.problem_times {
+            Some(times) => times.clone(),
+            None => st.out_times[st.next_snap.min(st.out_times.len())..].to_vec(),
+        };
+        let (end, times) = snapshot_times(&cfg, Some(st.t_end), future)?;
+        if !(st.t <= end) {
+            bail!(
+                "key `time.end`: {end} is before the checkpoint's time t = {} ({what})",
+                st.t
+            );
+        }
         st.t_end = end;
-        st.out_times.retain(|&x| x <= end);
+        st.out_times.truncate(st.next_snap);
+        let t = st.t;
+        st.out_times
+            .extend(times.into_iter().filter(|&x| x > t * (1.0 + 1e-12)));
     }
     Ok(Resumable { cfg, st, p, bx })
 }
@@ -352,6 +409,14 @@ struct LoopState {
     peak_grid_cells: u64,
     #[serde(default)]
     peak_grid_index_bytes: usize,
+    /// The run's identity (also in the folder's `run.id`): a resumed run takes only its own
+    /// checkpoints. Empty in checkpoints written before runs had one.
+    #[serde(default)]
+    run_id: String,
+    /// The problem's own output times (a ring's τ), kept so that `--resume --set` can
+    /// recompute the snapshot times for a new end or interval.
+    #[serde(default)]
+    problem_times: Option<Vec<f64>>,
     /// A binary's L1 injector.
     #[serde(default)]
     injector: Option<InjectorState>,
@@ -524,6 +589,7 @@ pub fn run_in_team<const D: usize>(
         std::fs::create_dir_all(&opts.out)
             .with_context(|| format!("cannot create output folder {}", opts.out.display()))?;
         let lock = FolderLock::acquire(&opts.out)?;
+        run_folder::remove_stale_temporaries(&opts.out)?;
         if !opts.force {
             run_folder::refuse_if_used(&opts.out)?;
         }
@@ -540,6 +606,11 @@ pub fn run_in_team<const D: usize>(
         // The problem file as run (overrides applied), for analyses and for reproducing it.
         let text = toml::to_string(cfg).context("cannot write the configuration")?;
         write_atomic(&opts.out.join("run.toml"), text.as_bytes())?;
+        run.st.run_id = run_folder::new_run_id(&text);
+        write_atomic(
+            &opts.out.join(run_folder::RUN_ID_FILE),
+            format!("{}\n", run.st.run_id).as_bytes(),
+        )?;
         RunLog::open(&opts.out)?
     } else {
         RunLog::silent()
@@ -577,16 +648,20 @@ pub fn resume_in_team<const D: usize>(
     team: &mut dyn Team<D>,
 ) -> Result<Outcome<D>> {
     let (_lock, mut log) = if team.is_root() {
-        (
-            Some(FolderLock::acquire(&opts.out)?),
-            RunLog::open(&opts.out)?,
-        )
+        let lock = FolderLock::acquire(&opts.out)?;
+        let stale = run_folder::remove_stale_temporaries(&opts.out)?;
+        let mut log = RunLog::open(&opts.out)?;
+        if stale > 0 {
+            log.line(&format!("removed {stale} temporary files of killed writes"));
+        }
+        (Some(lock), log)
     } else {
         (None, RunLog::silent())
     };
+    let expected = run_folder::read_run_id(&opts.out)?;
     let mut first_err = None;
-    for path in checkpoint::list(&opts.out)? {
-        match load_checkpoint::<D>(&path, overrides) {
+    for (k, path) in checkpoint::list(&opts.out)?.into_iter().enumerate() {
+        match load_checkpoint::<D>(&path, overrides, expected.as_deref()) {
             Ok(Resumable { cfg, st, p, bx }) => {
                 log.line(&format!(
                     "resume from {} at t = {} (step {})",
@@ -594,10 +669,16 @@ pub fn resume_in_team<const D: usize>(
                     st.t,
                     st.steps
                 ));
+                if team.is_root() && !overrides.is_empty() {
+                    // The problem as it now runs.
+                    let text = toml::to_string(&cfg).context("cannot write the configuration")?;
+                    write_atomic(&opts.out.join("run.toml"), text.as_bytes())?;
+                }
                 let mut run = Run::new(cfg, p, st, bx);
                 team.distribute(&mut run.p, &run.bx);
                 return advance(run, opts, log, team);
             }
+            Err(e) if k == 0 && e.is::<ForeignRun>() => return Err(e),
             Err(e) => {
                 log.line(&format!("skip checkpoint: {e:#}"));
                 first_err.get_or_insert(e);
@@ -664,6 +745,7 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
             state.particles
         }
     };
+    let problem_times = output_times.clone();
     let (t_end, out_times) = snapshot_times(cfg, problem_t_end, output_times)?;
 
     let zero = TotalsRecord::from(&particles.totals(None));
@@ -692,6 +774,8 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
         wall_before: 0.0,
         peak_grid_cells: 0,
         peak_grid_index_bytes: 0,
+        run_id: String::new(),
+        problem_times: Some(problem_times),
         injector,
         budget: MassBudget::default(),
         next_series: 0.0,
@@ -705,7 +789,28 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
         }
         stats = rhs(&mut run.p, &run.bx, &run.phys, run.window);
     }
-    let totals = TotalsRecord::from(&run.p.totals(run.phys.gravity.as_ref()));
+    let now = run.p.totals(run.phys.gravity.as_ref());
+    let energies = [
+        now.kinetic,
+        now.internal,
+        now.potential,
+        now.mass,
+        now.momentum_scale,
+        now.angular_momentum,
+    ];
+    if !energies.iter().all(|e| e.is_finite()) || !run.p.rho.iter().all(|r| r.is_finite()) {
+        let culprit = cfg.largest_value().map_or(String::new(), |(k, v)| {
+            format!("key `{k}` = {v:e}, the largest value in the problem: ")
+        });
+        bail!(
+            "{culprit}the set-up's totals overflow (mass {:e}, kinetic {:e}, internal {:e}, potential {:e} energy): lower the values that scale them",
+            now.mass,
+            now.kinetic,
+            now.internal,
+            now.potential
+        );
+    }
+    let totals = TotalsRecord::from(&now);
     run.st.totals_start = totals.clone();
     run.st.prev = totals;
     run.st.peak_pairs = stats.peak_pairs;
@@ -778,6 +883,7 @@ fn advance<const D: usize>(
         statistics_row(team, &run.p, gravity, &run.st, 0.0, &mut stats)?;
     }
     let bar = progress_bar(opts.progress && root);
+    let first_step = run.st.steps;
     while run.st.t < t_end * (1.0 - 1e-12) {
         if let Some(mt) = &run.mt {
             inject_stream(mt, &mut run.p, &mut run.st, &run.phys, team);
@@ -798,9 +904,21 @@ fn advance<const D: usize>(
         team.min(&mut dt);
         let [mut dt] = dt;
         if !(dt > 0.0 && dt.is_finite()) {
+            let culprit = run.cfg.largest_value().map_or(String::new(), |(k, v)| {
+                format!(" (the largest value in the problem: key `{k}` = {v:e})")
+            });
             bail!(
-                "time step is {dt} at t = {}: the state is not physical (check the set-up)",
+                "time step is {dt} at t = {}: the state is not physical; check the set-up{culprit}",
                 st.t
+            );
+        }
+        // A run that would spin for hours at a vanishing step says so at once.
+        let budget = run.cfg.time.max_steps.saturating_sub(st.steps);
+        if st.steps == first_step && (t_end - st.t) / dt > budget as f64 {
+            bail!(
+                "key `time.max_steps`: the first time step, dt = {dt:e} at t = {}, would take about {:.1e} steps to reach time.end = {t_end}, more than the {budget} left: check time.courant, time.force, time.energy, time.viscous, particles.h or particles.h_factor and the set-up's speeds, or raise time.max_steps",
+                st.t,
+                (t_end - st.t) / dt
             );
         }
         let target = st

@@ -465,3 +465,91 @@ fn values_that_pass_validation_are_bounded_before_anything_is_allocated() {
         assert_fails(d.path(), &args, &["--threads", &many]);
     }
 }
+
+#[test]
+fn a_run_larger_than_the_memory_is_refused_naming_the_key() {
+    let d = tempfile::tempdir().unwrap();
+    // 1500³ = 3.4·10⁹ particles: within the 2³² a run can index, but terabytes.
+    assert_check_and_run_fail(
+        d.path(),
+        &problem("sedov.toml"),
+        &["particles.n=1500"],
+        &["particles.n", "GiB", "SPHDISK_MEMORY_LIMIT"],
+    );
+    // The limit set by hand: 10⁵ particles of a tube in 1 MiB do not fit, 900 do.
+    let run = |sets: &[&str]| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_sphdisk"));
+        cmd.args(["check", &problem("sod.toml")]);
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        let out = cmd.env("SPHDISK_MEMORY_LIMIT", "1M").output().unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (code, err) = run(&["particles.n=100000"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("particles.n") && err.contains("available"),
+        "{err}"
+    );
+    let (code, err) = run(&[]);
+    assert_eq!(code, Some(0), "{err}");
+}
+
+#[test]
+fn nonsense_that_used_to_pass_is_named() {
+    let d = tempfile::tempdir().unwrap();
+    let sod = problem("sod.toml");
+    let cases: [(&str, &[&str], &[&str]); 7] = [
+        // An array where a table { rho, p, v } belongs was read as ρ = 1, p = 2.
+        ("sod.toml", &["sod.left=[1, 2]"], &["sod.left", "table"]),
+        // Infinities and NaN: named by key, not by what they do to particle 0.
+        (
+            "ring.toml",
+            &["ring.tau_end=inf"],
+            &["ring.tau_end", "finite"],
+        ),
+        (
+            "advection.toml",
+            &["advection.width=inf"],
+            &["advection.width"],
+        ),
+        (
+            "advection.toml",
+            &["advection.velocity=nan"],
+            &["advection.velocity"],
+        ),
+        (
+            "sedov2d.toml",
+            &["sedov.deposit_radius=inf"],
+            &["sedov.deposit_radius"],
+        ),
+        // Values whose energies overflow: the largest one is named.
+        (
+            "advection.toml",
+            &["advection.velocity=1e300"],
+            &["advection.velocity", "overflow"],
+        ),
+        // A step limiter so small the run would take ~10³⁰⁰ steps: named at once.
+        (
+            "sod.toml",
+            &["time.courant=1e-300"],
+            &["time.max_steps", "time.courant"],
+        ),
+    ];
+    for (file, sets, expect) in cases {
+        let out = d.path().join("out");
+        let _ = std::fs::remove_dir_all(&out);
+        let mut args = vec!["run", &sod, "--quiet", "--out", "out"];
+        let p = problem(file);
+        args[1] = &p;
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        assert_fails(d.path(), &args, expect);
+    }
+}

@@ -125,6 +125,7 @@ fn force_leaves_only_the_new_runs_files() {
             "checkpoints/ckpt_0000000001.hdf5",
             "checkpoints/ckpt_0000000002.hdf5",
             "notes.txt",
+            "run.id",
             "run.log",
             "run.toml",
             "snap_0000.hdf5",
@@ -215,4 +216,46 @@ fn a_run_that_fails_releases_its_folder() {
     assert!(err.contains("time.max_steps"), "{err}");
     assert!(out.join("run.toml").is_file());
     assert!(!out.join(LOCK).exists(), "lock left behind");
+}
+
+#[test]
+fn temporaries_of_killed_writes_are_removed_when_a_run_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = dir.path().join("out");
+    std::fs::create_dir_all(o.join("checkpoints")).unwrap();
+    // A process that has ended left them.
+    let mut child = std::process::Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let stale = [
+        format!(".summary.json.tmp-{dead}"),
+        format!("checkpoints/.ckpt_0000000004.hdf5.tmp-{dead}"),
+    ];
+    for f in &stale {
+        std::fs::write(o.join(f), "half").unwrap();
+    }
+    let o_s = o.to_string_lossy().into_owned();
+    // A fresh run: the folder holds no run's files once they are gone.
+    ok(&[
+        "run",
+        &problem("sod.toml"),
+        "--quiet",
+        "--out",
+        &o_s,
+        "--set",
+        "particles.n=40",
+        "--set",
+        "time.end=0.01",
+    ]);
+    for f in &stale {
+        assert!(!o.join(f).exists(), "{f} left");
+    }
+    // And on resume.
+    for f in &stale {
+        std::fs::write(o.join(f), "half").unwrap();
+    }
+    ok(&["run", "--quiet", "--resume", &o_s, "--set", "time.end=0.02"]);
+    for f in &stale {
+        assert!(!o.join(f).exists(), "{f} left after resume");
+    }
 }

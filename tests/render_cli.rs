@@ -107,3 +107,94 @@ fn what_cannot_be_drawn_fails_with_one_line() {
         assert_eq!(err.lines().count(), 1, "{err}");
     }
 }
+
+#[test]
+fn a_snapshot_with_bad_particles_is_refused_naming_the_file_and_the_field() {
+    use sphdisk::io::hdf5::{RunMetadata, read_parameters, read_snapshot, write_snapshot};
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("blast");
+    let run_s = run.to_string_lossy().into_owned();
+    let (code, _, err) = sphdisk(&[
+        "run",
+        &problem("sedov2d.toml"),
+        "--quiet",
+        "--out",
+        &run_s,
+        "--set",
+        "particles.n=16",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let good = run.join("final.hdf5");
+    let meta = RunMetadata {
+        parameters: read_parameters(&good).unwrap(),
+        units: Default::default(),
+        periodic: false,
+        physical: false,
+    };
+    type Spoil = fn(&mut sphdisk::io::snapshot::Snapshot);
+    let spoils: [(&str, Spoil, &str); 5] = [
+        ("nan_x", |s| s.pos[0][3] = f64::NAN, "Coordinates"),
+        ("neg_mass", |s| s.mass[5] = -1.0, "Masses"),
+        ("zero_h", |s| s.h[2] = 0.0, "SmoothingLengths"),
+        ("inf_rho", |s| s.rho[7] = f64::INFINITY, "Densities"),
+        ("twin", |s| s.id[1] = s.id[0], "ParticleIDs"),
+    ];
+    for (name, spoil, field) in spoils {
+        let mut snap = read_snapshot(&good).unwrap();
+        spoil(&mut snap);
+        let bad = run.join(format!("snap_{name}.hdf5"));
+        write_snapshot(&bad, &snap, &meta, 1).unwrap();
+        let file = bad.to_string_lossy().into_owned();
+        let png = dir.path().join(format!("{name}.png"));
+        let png = png.to_string_lossy();
+        let from_out = dir.path().join(name).to_string_lossy().into_owned();
+        let cases: [&[&str]; 2] = [
+            &["render", &file, "--resolution", "32", "--out", &png],
+            &[
+                "run",
+                &problem("sedov2d.toml"),
+                "--quiet",
+                "--out",
+                &from_out,
+                "--set",
+                "particles.n=16",
+                "--from",
+                &file,
+            ],
+        ];
+        // `--from` takes h from the problem (GADGET files have none): h = 0 passes there.
+        let refused = if name == "zero_h" { 1 } else { 2 };
+        for args in &cases[..refused] {
+            let (code, _, err) = sphdisk(args);
+            assert_eq!(code, 2, "{name}: {args:?}: {err}");
+            assert_eq!(err.lines().count(), 1, "{err}");
+            assert!(
+                err.starts_with("error: ") && err.contains(&file) && err.contains(field),
+                "{name}: {err}"
+            );
+        }
+    }
+    // `analyse` reads the same way: a spoilt final.hdf5 of a shock tube.
+    let tube = dir.path().join("tube");
+    let (code, _, err) = sphdisk(&[
+        "run",
+        &problem("sod.toml"),
+        "--quiet",
+        "--out",
+        &tube.to_string_lossy(),
+        "--set",
+        "particles.n=40",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let fin = tube.join("final.hdf5");
+    let mut snap = read_snapshot(&fin).unwrap();
+    snap.pos[0][4] = f64::NAN;
+    write_snapshot(&fin, &snap, &meta, 1).unwrap();
+    let (code, _, err) = sphdisk(&["analyse", "sod", &tube.to_string_lossy()]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("final.hdf5") && err.contains("Coordinates"),
+        "{err}"
+    );
+}

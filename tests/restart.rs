@@ -1,9 +1,11 @@
 //! Guards checkpoints and restarts: a run stopped at step k and resumed ends in exactly the
 //! state (every bit of every particle array) of the run that was never stopped; a run killed
-//! by SIGKILL resumes from its newest complete checkpoint; SIGTERM checkpoints the step and
+//! by SIGKILL three times and stopped by SIGTERM once, resumed after each, ends in the same
+//! bits (falling back past a truncated newest checkpoint); SIGTERM checkpoints the step and
 //! exits with 143; a snapshot restarts a problem
 //! (`--from`); and bad restart input fails with one clear line.
 
+use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -105,8 +107,58 @@ fn resumed_viscous_ring_is_bit_identical_to_the_uninterrupted_run() {
     );
 }
 
+/// The step of the newest checkpoint of `run` (0 when it has none).
+fn newest_step(run: &Path) -> u64 {
+    checkpoint::list(run)
+        .ok()
+        .and_then(|l| l.into_iter().next())
+        .and_then(|p| {
+            let name = p.file_stem()?.to_string_lossy().into_owned();
+            name.strip_prefix("ckpt_")?.parse().ok()
+        })
+        .unwrap_or(0)
+}
+
+/// Starts `args`, waits until `run` has a checkpoint `ahead` steps past its newest one
+/// when this was called, lets it go on for `after_ms`, then sends `signal`; returns the
+/// exit status, or None if the run finished before the signal landed.
+fn interrupt(
+    args: &[&str],
+    run: &Path,
+    ahead: u64,
+    after_ms: u64,
+    signal: &str,
+) -> Option<std::process::ExitStatus> {
+    let from = newest_step(run);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sphdisk"))
+        .args(args)
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while newest_step(run) < from + ahead {
+        if let Some(st) = child.try_wait().unwrap() {
+            assert!(st.success(), "{args:?}: {st}");
+            return None;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(120),
+            "no checkpoints written"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    std::thread::sleep(Duration::from_millis(after_ms));
+    let sent = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    (!status.success()).then_some(status)
+}
+
 #[test]
-fn killed_run_resumes_from_its_newest_complete_checkpoint() {
+fn a_run_killed_several_times_and_stopped_by_sigterm_resumes_bit_identically() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
     let p = problem("sedov2d.toml");
@@ -116,46 +168,49 @@ fn killed_run_resumes_from_its_newest_complete_checkpoint() {
         "--set",
         "output.checkpoint_steps=1",
         "--set",
-        "time.end=0.05",
+        "time.end=0.08",
     ];
-    let mut args = vec!["run", &p, "--quiet", "--out"];
-    let a_s = s(&a);
-    let b_s = s(&b);
-    ok(&[&args[..], &[a_s.as_str()], &sets[..]].concat());
-    args.push(&b_s);
-    args.extend(sets);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sphdisk"))
-        .args(&args)
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    // Let it write a few checkpoints (one per step), then SIGKILL it wherever it is.
-    let t0 = Instant::now();
-    while checkpoint::list(&b).map(|l| l.len()).unwrap_or(0) < 2 {
-        assert!(
-            t0.elapsed() < Duration::from_secs(60),
-            "no checkpoints written"
-        );
-        std::thread::sleep(Duration::from_millis(5));
+    let (a_s, b_s) = (s(&a), s(&b));
+    ok(&[&["run", &p, "--quiet", "--out", &a_s][..], &sets[..]].concat());
+    let fresh = [&["run", &p, "--quiet", "--out", &b_s][..], &sets[..]].concat();
+    let resume = ["run", "--quiet", "--resume", &b_s];
+    // SIGKILL at three moments (a few checkpoints in, at varying offsets into a step), each
+    // followed by a resume; then a scheduler's SIGTERM; then the resume to the end.
+    let mut kills = 0;
+    for (k, (ahead, after_ms)) in [(3, 0), (4, 7), (5, 13)].into_iter().enumerate() {
+        let args: &[&str] = if k == 0 { &fresh } else { &resume };
+        let Some(status) = interrupt(args, &b, ahead, after_ms, "-KILL") else {
+            break;
+        };
+        assert_eq!(status.signal(), Some(9), "killed: {status}");
+        kills += 1;
+        if k == 0 {
+            // The worst a kill during a write could leave if rename were not atomic: a
+            // truncated newest checkpoint. The resume must fall back to the previous one.
+            let newest: PathBuf = checkpoint::list(&b).unwrap().remove(0);
+            let bytes = std::fs::read(&newest).unwrap();
+            std::fs::write(&newest, &bytes[..bytes.len() / 2]).unwrap();
+        }
     }
-    std::thread::sleep(Duration::from_millis(30));
-    child.kill().unwrap();
-    let status = child.wait().unwrap();
-    if status.success() {
-        // Finished before the kill landed: nothing to show on this machine.
-        eprintln!("run finished before SIGKILL; resume not exercised");
-        return;
+    let mut terms = 0;
+    if kills == 3
+        && let Some(status) = interrupt(&resume, &b, 3, 3, "-TERM")
+    {
+        // 128 + 15, after writing a checkpoint of the step it was in.
+        assert_eq!(status.code(), Some(143), "{status}");
+        assert!(!b.join("summary.json").exists());
+        assert!(!b.join(".sphdisk.lock").exists(), "the lock is released");
+        terms += 1;
     }
-    // The worst a kill during a write could leave if rename were not atomic: a truncated
-    // newest checkpoint. Resume must fall back to the previous one.
-    let list = checkpoint::list(&b).unwrap();
-    assert!(list.len() >= 2, "two checkpoints kept: {list:?}");
-    let newest: PathBuf = list[0].clone();
-    let bytes = std::fs::read(&newest).unwrap();
-    std::fs::write(&newest, &bytes[..bytes.len() / 2]).unwrap();
-    ok(&["run", "--quiet", "--resume", &b_s]);
+    if !b.join("summary.json").exists() {
+        ok(&resume);
+    }
+    eprintln!("{kills} SIGKILLs and {terms} SIGTERM before the end");
+    // On any machine the first kills land: the run has far more steps than they need.
+    assert_eq!((kills, terms), (3, 1), "the run ended before every signal");
     let log = std::fs::read_to_string(b.join("run.log")).unwrap();
     assert!(log.contains("skip checkpoint"), "{log}");
+    assert_eq!(log.matches("resume from").count(), 4, "{log}");
     assert_same_state::<2>(&a, &b);
 }
 

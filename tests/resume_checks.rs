@@ -187,3 +187,120 @@ fn no_intact_checkpoint_is_one_line_naming_the_newest() {
         "{err}"
     );
 }
+
+#[test]
+fn a_checkpoint_of_another_run_is_refused_and_never_fallen_back_to() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, b) = runs(dir.path());
+    // Another run of the same problem, stopped at step 6: checkpoints of steps 6 and 4.
+    let other = dir.path().join("other");
+    ok(&[
+        &[
+            "run",
+            &problem("sedov2d.toml"),
+            "--quiet",
+            "--out",
+            &s(&other),
+            "--stop-after",
+            "6",
+        ],
+        &SETS[..],
+    ]
+    .concat());
+    let foreign = |step: u64| checkpoint::folder(&other).join(format!("ckpt_{step:010}.hdf5"));
+    // Its newest checkpoint copied into b's folder: refused by name, nothing resumed.
+    let run = dir.path().join("newest_foreign");
+    copy_run(&b, &run);
+    let into = checkpoint::folder(&run).join("ckpt_0000000006.hdf5");
+    std::fs::copy(foreign(6), &into).unwrap();
+    let (code, err) = sphdisk(&["run", "--quiet", "--resume", &s(&run)]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("ckpt_0000000006.hdf5") && err.contains("another run"),
+        "{err}"
+    );
+    assert!(!run.join("summary.json").exists(), "nothing was resumed");
+    // b's own newest damaged and its older one replaced by the other run's: the fallback
+    // does not cross runs.
+    let run = dir.path().join("older_foreign");
+    copy_run(&b, &run);
+    flip_a_bit(&run);
+    let older = checkpoint::folder(&run).join("ckpt_0000000002.hdf5");
+    std::fs::copy(foreign(4), &older).unwrap();
+    let (code, err) = sphdisk(&["run", "--quiet", "--resume", &s(&run)]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("no usable checkpoint"), "{err}");
+    assert!(!run.join("summary.json").exists(), "nothing was resumed");
+}
+
+#[test]
+fn a_finished_run_is_extended_with_new_end_and_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("tube");
+    let r = s(&run);
+    let sets = [
+        "--set",
+        "particles.n=40",
+        "--set",
+        "time.end=0.02",
+        "--set",
+        "output.interval=0.01",
+    ];
+    ok(&[
+        &["run", &problem("sod.toml"), "--quiet", "--out", &r][..],
+        &sets[..],
+    ]
+    .concat());
+    let snaps = |run: &Path| -> Vec<f64> {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(run.join("snapshots.json")).unwrap())
+                .unwrap();
+        v["snapshots"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["time"].as_f64().unwrap())
+            .collect()
+    };
+    assert_eq!(snaps(&run), [0.0, 0.01, 0.02]);
+    ok(&[
+        "run",
+        "--quiet",
+        "--resume",
+        &r,
+        "--set",
+        "time.end=0.03",
+        "--set",
+        "output.interval=0.005",
+    ]);
+    let t: Vec<f64> = snaps(&run);
+    assert_eq!(t.len(), 5, "{t:?}");
+    assert!(
+        (t[3] - 0.025).abs() < 1e-12 && (t[4] - 0.03).abs() < 1e-12,
+        "{t:?}"
+    );
+    for k in 0..5 {
+        assert!(run.join(format!("snap_{k:04}.hdf5")).exists());
+    }
+    let toml = std::fs::read_to_string(run.join("run.toml")).unwrap();
+    assert!(
+        toml.contains("end = 0.03") && toml.contains("interval = 0.005"),
+        "{toml}"
+    );
+    let summary = std::fs::read_to_string(run.join("summary.json")).unwrap();
+    assert!(summary.contains("\"t_end\": 0.03"), "{summary}");
+    // What the particles are cannot change mid-run: named, nothing run.
+    let (code, err) = sphdisk(&["run", "--quiet", "--resume", &r, "--set", "particles.n=80"]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("particles.n") && err.contains("resumed"),
+        "{err}"
+    );
+    // An end before the checkpoint's time is named too.
+    let (code, err) = sphdisk(&["run", "--quiet", "--resume", &r, "--set", "time.end=0.01"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("time.end"), "{err}");
+}

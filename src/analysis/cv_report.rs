@@ -51,7 +51,7 @@ use serde::Serialize;
 use crate::analysis::{roche, run_config, weighted_quantile};
 use crate::config::ProblemKind;
 use crate::io::atomic::write_atomic;
-use crate::io::hdf5::read_snapshot;
+use crate::io::hdf5::read_snapshot_with_h;
 use crate::io::snapshot::Snapshot;
 use crate::physics::binary::{Binary, Region};
 use crate::simulation::SnapshotIndex;
@@ -226,7 +226,7 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
     if run.join("final.hdf5").exists() {
         let path = run.join("final.hdf5");
         // read_snapshot's errors name the file.
-        let snap = read_snapshot(&path)?;
+        let snap = read_snapshot_with_h(&path)?;
         if snap.time > last_t + 1e-9 * last_t.abs().max(1.0) {
             files.push(("final.hdf5".into(), snap.time));
         }
@@ -240,7 +240,7 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
     let mut rows = Vec::with_capacity(files.len());
     for (name, _) in &files {
         let path = run.join(name);
-        let snap = read_snapshot(&path)?.in_run_frame();
+        let snap = read_snapshot_with_h(&path)?.in_run_frame();
         if snap.dimension != dimension {
             bail!(
                 "{}: the snapshot is {}D but run.toml's problem is {dimension}D",

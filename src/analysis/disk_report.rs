@@ -13,7 +13,7 @@ use anyhow::{Result, bail};
 use crate::analysis::run_config;
 use crate::config::{Config, ProblemKind};
 use crate::io::atomic::write_atomic;
-use crate::io::hdf5::read_snapshot;
+use crate::io::hdf5::read_snapshot_with_h;
 use crate::problems::disk::{errors_from_start, setup};
 use crate::simulation::SnapshotIndex;
 
@@ -38,7 +38,7 @@ fn analyse<const D: usize>(run: &Path, cfg: &Config) -> Result<DiskReport> {
     let index = SnapshotIndex::read(run)?;
     let mut rows = Vec::new();
     for snap in index.snapshots.iter().filter(|s| s.time > 0.0) {
-        let p = read_snapshot(&run.join(&snap.file))?.to_particles::<D>()?;
+        let p = read_snapshot_with_h(&run.join(&snap.file))?.to_particles::<D>()?;
         rows.push((snap.time, errors_from_start(cfg, &start, &p, snap.time)?));
     }
     if rows.is_empty() {

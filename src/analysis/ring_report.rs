@@ -9,7 +9,7 @@ use anyhow::{Context, Result};
 
 use crate::analysis::annulus_stats;
 use crate::io::atomic::write_atomic;
-use crate::io::hdf5::read_snapshot;
+use crate::io::hdf5::read_snapshot_with_h;
 use crate::io::summary::Summary;
 use crate::problems::ring::{exact, ring_l1, tau_at};
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
@@ -45,7 +45,7 @@ pub fn analyse_ring(run: &Path) -> Result<RingReport> {
     let mut last_tau = rec.tau_start;
     let snaps: Vec<_> = index.snapshots.iter().filter(|s| s.time > 0.0).collect();
     for (k, snap) in snaps.iter().enumerate() {
-        let p = read_snapshot(&run.join(&snap.file))?.to_particles::<2>()?;
+        let p = read_snapshot_with_h(&run.join(&snap.file))?.to_particles::<2>()?;
         let tau = tau_at(&rec, snap.time);
         let stats = annulus_stats(&p, rec.spacing);
         let l1 = ring_l1(&rec, &p, snap.time);

@@ -10,14 +10,14 @@ use anyhow::{Result, bail};
 use crate::analysis::run_config;
 use crate::config::ProblemKind;
 use crate::io::atomic::write_atomic;
-use crate::io::hdf5::read_snapshot;
+use crate::io::hdf5::read_snapshot_with_h;
 use crate::problems::sod::{params, solution};
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
 
 /// Reads `run.toml` and `final.hdf5` of a shock-tube run and writes the plot and the CSV.
 pub fn analyse_sod(run: &Path) -> Result<Vec<PathBuf>> {
     let cfg = run_config(run, ProblemKind::Sod, "a shock-tube run")?;
-    let snap = read_snapshot(&run.join("final.hdf5"))?;
+    let snap = read_snapshot_with_h(&run.join("final.hdf5"))?;
     let s = params(&cfg);
     let sol = solution(&cfg)?;
     let t = snap.time;

@@ -67,13 +67,13 @@ pub fn write<const D: usize>(
 }
 
 /// 64-bit FNV-1a of `bytes`, continuing from `hash`.
-fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
+pub(crate) fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
     bytes.iter().fold(hash, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })
 }
 
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+pub(crate) const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 
 /// The names of what [`checksums`] covers, in its order.
 fn checksum_names<const D: usize>(p: &mut Particles<D>) -> Vec<String> {

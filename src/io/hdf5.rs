@@ -555,6 +555,17 @@ pub fn read_snapshot(path: &Path) -> Result<Snapshot> {
             append(&mut snap, *s);
         }
     }
+    snap.validate()
+        .with_context(|| path.display().to_string())?;
+    Ok(snap)
+}
+
+/// [`read_snapshot`] for a picture or an analysis, which interpolate with each particle's
+/// smoothing length: also refuses an h that is not > 0.
+pub fn read_snapshot_with_h(path: &Path) -> Result<Snapshot> {
+    let snap = read_snapshot(path)?;
+    snap.validate_for_interpolation()
+        .with_context(|| path.display().to_string())?;
     Ok(snap)
 }
 
@@ -697,8 +708,19 @@ fn read_one(path: &Path) -> Result<Part> {
         .map(|a| box_size.get(a).copied().unwrap_or(box_size[0]))
         .collect();
     let shift = attr_vec(&header, "Shift").unwrap_or_else(|| vec![0.0; 3]);
-    let num_files = attr_f64(&header, "NumFilesPerSnapshot").unwrap_or(1.0) as usize;
-    let this_file = attr_f64(&header, "ThisFile").unwrap_or(0.0) as usize;
+    let num_files = attr_f64(&header, "NumFilesPerSnapshot").unwrap_or(1.0);
+    if !(1.0..=crate::limits::MAX_FILES_PER_SNAPSHOT as f64).contains(&num_files) {
+        bail!(
+            "{what}: Header/NumFilesPerSnapshot = {num_files} is not between 1 and {}",
+            crate::limits::MAX_FILES_PER_SNAPSHOT
+        );
+    }
+    let num_files = num_files as usize;
+    let this_file = attr_f64(&header, "ThisFile").unwrap_or(0.0);
+    if !(0.0..num_files as f64).contains(&this_file) {
+        bail!("{what}: Header/ThisFile = {this_file} is not a part of {num_files}");
+    }
+    let this_file = this_file as usize;
     let mass_table = attr_vec(&header, "MassTable").unwrap_or_default();
 
     let gas = file

@@ -15,6 +15,7 @@ pub const LOCK_FILE: &str = ".sphdisk.lock";
 /// Files of a run (and of the analyses of it) directly in its folder.
 const RUN_FILES: &[&str] = &[
     "run.toml",
+    RUN_ID_FILE,
     "run.log",
     "summary.json",
     "final.csv",
@@ -41,6 +42,39 @@ const RUN_FILES: &[&str] = &[
     "periodogram.png",
     "lightcurve.json",
 ];
+
+/// The file holding the identity of the run in a folder (written at its start).
+pub const RUN_ID_FILE: &str = "run.id";
+
+/// A new run's identity: a hash of its resolved problem (`config`) and of the moment and
+/// process it starts in, as 32 hex digits.
+pub fn new_run_id(config: &str) -> String {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    let start = format!("{nanos}:{}", std::process::id());
+    format!(
+        "{:016x}{:016x}",
+        checkpoint::fnv1a(checkpoint::FNV_OFFSET, config.as_bytes()),
+        checkpoint::fnv1a(checkpoint::FNV_OFFSET, start.as_bytes())
+    )
+}
+
+/// The identity of the run in `dir` (its `run.id`), if it has one.
+pub fn read_run_id(dir: &Path) -> Result<Option<String>> {
+    let path = dir.join(RUN_ID_FILE);
+    match std::fs::read_to_string(&path) {
+        Ok(text) => {
+            let id = text.trim();
+            if id.is_empty() || id.len() > 64 || !id.bytes().all(|b| b.is_ascii_hexdigit()) {
+                bail!("{}: not a run id", path.display());
+            }
+            Ok(Some(id.to_string()))
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(e).with_context(|| format!("cannot read {}", path.display())),
+    }
+}
 
 /// The exclusive hold of a run on its output folder; the lock file goes when this does
 /// (end of the run, an error, a panic that unwinds).
@@ -202,6 +236,36 @@ pub fn run_files(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(found)
 }
 
+/// The process id of a temporary file of an atomic write (`.NAME.tmp-PID`).
+fn temporary_pid(name: &str) -> Option<u32> {
+    let (_, pid) = name.strip_prefix('.')?.rsplit_once(".tmp-")?;
+    pid.parse().ok()
+}
+
+/// Removes the temporaries of atomic writes (`.NAME.tmp-PID`, in `dir` and its checkpoint
+/// folder) whose process no longer runs: what a write killed half-way leaves. Called by a
+/// run that holds the folder, before it writes; returns how many went.
+pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
+    let mut removed = 0;
+    for folder in [dir.to_path_buf(), checkpoint::folder(dir)] {
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let name = e.file_name();
+            let Some(pid) = name.to_str().and_then(temporary_pid) else {
+                continue;
+            };
+            if pid != std::process::id() && !process_alive(pid) && e.path().is_file() {
+                std::fs::remove_file(e.path())
+                    .with_context(|| format!("cannot remove {}", e.path().display()))?;
+                removed += 1;
+            }
+        }
+    }
+    Ok(removed)
+}
+
 /// Refuses a fresh run into `dir` if it holds another run's files; one line names the
 /// folder, a few of the files and the ways on.
 pub fn refuse_if_used(dir: &Path) -> Result<()> {
@@ -321,6 +385,37 @@ mod tests {
         let _lock = lock.unwrap();
         let text = std::fs::read_to_string(dir.path().join(LOCK_FILE)).unwrap();
         assert_eq!(text, std::process::id().to_string());
+    }
+
+    #[test]
+    fn temporaries_of_dead_processes_are_removed_and_others_kept() {
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let me = std::process::id();
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir_all(checkpoint::folder(d)).unwrap();
+        let stale = [
+            format!(".summary.json.tmp-{dead}"),
+            format!("checkpoints/.ckpt_0000000004.hdf5.tmp-{dead}"),
+        ];
+        let kept = [
+            format!(".run.toml.tmp-{me}"),
+            ".notes.tmp-x".to_string(),
+            "notes.txt".to_string(),
+        ];
+        for f in stale.iter().chain(&kept) {
+            std::fs::write(d.join(f), "x").unwrap();
+        }
+        assert_eq!(remove_stale_temporaries(d).unwrap(), 2);
+        for f in &stale {
+            assert!(!d.join(f).exists(), "{f}");
+        }
+        for f in &kept {
+            assert!(d.join(f).exists(), "{f}");
+        }
+        assert_eq!(remove_stale_temporaries(d).unwrap(), 0);
     }
 
     #[test]

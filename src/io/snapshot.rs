@@ -126,6 +126,82 @@ impl Snapshot {
         Ok(p)
     }
 
+    /// Refuses what no run writes, naming the dataset and the first particle at fault:
+    /// coordinates, velocities, densities, internal energies, pressures or dissipation
+    /// rates that are not finite, masses that are not positive, smoothing lengths, densities
+    /// or internal energies below 0, an id twice; a box, shift or time that is not finite.
+    /// (GADGET initial conditions without smoothing lengths or densities read as 0.)
+    pub fn validate(&self) -> Result<()> {
+        let names = ["x", "y", "z"];
+        for a in 0..3 {
+            let side = self.box_hi[a] - self.box_lo[a];
+            if !(side > 0.0 && side.is_finite()) {
+                bail!(
+                    "Header/BoxSize: side {side} along {} is not a positive number",
+                    names[a]
+                );
+            }
+            if !self.shift[a].is_finite() {
+                bail!(
+                    "Header/Shift: {} along {} is not finite",
+                    self.shift[a],
+                    names[a]
+                );
+            }
+        }
+        if !self.time.is_finite() {
+            bail!("Header/Time: {} is not finite", self.time);
+        }
+        type Check = fn(f64) -> bool;
+        let finite: Check = f64::is_finite;
+        let positive: Check = |x| x > 0.0 && x.is_finite();
+        let non_negative: Check = |x| x >= 0.0 && x.is_finite();
+        let columns: [(&str, &[f64], Check, &str); 13] = [
+            ("Coordinates (x)", &self.pos[0], finite, "finite"),
+            ("Coordinates (y)", &self.pos[1], finite, "finite"),
+            ("Coordinates (z)", &self.pos[2], finite, "finite"),
+            ("Velocities (x)", &self.vel[0], finite, "finite"),
+            ("Velocities (y)", &self.vel[1], finite, "finite"),
+            ("Velocities (z)", &self.vel[2], finite, "finite"),
+            ("Masses", &self.mass, positive, "> 0"),
+            ("SmoothingLengths", &self.h, non_negative, "≥ 0"),
+            ("Densities", &self.rho, non_negative, "≥ 0"),
+            ("InternalEnergies", &self.u, non_negative, "≥ 0"),
+            ("Pressures", &self.p, finite, "finite"),
+            ("DissipationRates", &self.diss, finite, "finite"),
+            ("ParticleIDs", &[], finite, ""),
+        ];
+        for (name, v, ok, what) in columns {
+            if let Some(i) = v.iter().position(|&x| !ok(x)) {
+                bail!(
+                    "PartType0/{name}: particle {} has {}, expected {what}",
+                    self.id.get(i).copied().unwrap_or(i as u64),
+                    v[i]
+                );
+            }
+        }
+        let mut ids = self.id.clone();
+        ids.sort_unstable();
+        if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+            bail!("PartType0/ParticleIDs: id {} appears twice", w[0]);
+        }
+        Ok(())
+    }
+
+    /// [`Snapshot::validate`] and a positive smoothing length on every particle, which a
+    /// picture or an analysis interpolates with.
+    pub fn validate_for_interpolation(&self) -> Result<()> {
+        self.validate()?;
+        if let Some(i) = self.h.iter().position(|&h| !(h > 0.0)) {
+            bail!(
+                "PartType0/SmoothingLengths: particle {} has {}, expected > 0",
+                self.id[i],
+                self.h[i]
+            );
+        }
+        Ok(())
+    }
+
     /// The snapshot in the run's own frame (positions and box shifted back by `shift`), for
     /// pictures whose axes should read as the problem file's coordinates.
     pub fn in_run_frame(mut self) -> Self {

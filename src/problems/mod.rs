@@ -88,6 +88,11 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         ProblemKind::File => file::setup(cfg)?,
         ProblemKind::Cv => cv::setup(cfg)?,
     };
+    // A box too small for the kernel: h is what the problem's resolution keys set.
+    state
+        .bx
+        .validate(cfg.particles.kernel.support_factor() * state.h)
+        .map_err(|e| anyhow::anyhow!("key `{}`: {e}", crate::limits::h_key(cfg)))?;
     check_initial_state(&state, cfg.particles.kernel)?;
     crate::limits::check_grid(cfg, &state.bx, state.h, &state.particles.pos)?;
     Ok(state)

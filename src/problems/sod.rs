@@ -32,8 +32,16 @@ pub(crate) fn solution(cfg: &Config) -> Result<RiemannSolution> {
         v: x.v,
         p: x.p,
     };
-    RiemannSolution::solve(st(&s.left), st(&s.right), gamma)
-        .map_err(|e| anyhow::anyhow!("sod: {e}"))
+    for (side, x) in [("left", &s.left), ("right", &s.right)] {
+        for (key, v) in [("rho", x.rho), ("p", x.p)] {
+            if !(v > 0.0 && v.is_finite()) {
+                bail!("key `sod.{side}.{key}`: must be > 0, got {v}");
+            }
+        }
+    }
+    RiemannSolution::solve(st(&s.left), st(&s.right), gamma).map_err(|e| {
+        anyhow::anyhow!("keys `sod.left` and `sod.right`: no exact solution for these states ({e})")
+    })
 }
 
 pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
@@ -92,8 +100,16 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let mut sp_r = [dy_r; D];
     sp_r[0] = dx_r;
     // Both blocks together within the bound, before either is built.
-    let both = crate::limits::lattice_count(counts_l)? as u64
-        + crate::limits::lattice_count(counts_r)? as u64;
+    let ratio = |e: anyhow::Error| {
+        anyhow::anyhow!(
+            "{e} (with sod.left.rho / sod.right.rho = {:e} and sod.length = {})",
+            l.rho / r.rho,
+            s.length
+        )
+    };
+    let both = crate::limits::lattice_count(counts_l).map_err(ratio)? as u64
+        + crate::limits::lattice_count(counts_r).map_err(ratio)? as u64;
+    crate::limits::check_memory::<D>(both, "particles.n")?;
     if both > crate::limits::MAX_PARTICLES {
         bail!(
             "key `particles.n`: the tube would hold {both} particles, more than the {} a run can hold",

@@ -91,6 +91,13 @@ pub fn render_field(snap: &Snapshot, opts: &RenderOptions) -> Result<(Vec<f64>, 
 
 /// Interpolates and draws `snap` as `opts` says into the PNG `path` (written atomically).
 pub fn render_png(snap: &Snapshot, opts: &RenderOptions, path: &Path) -> Result<RenderedImage> {
+    if path.is_dir() {
+        bail!(
+            "{} is a folder: give the PNG file to write (e.g. {})",
+            path.display(),
+            path.join("picture.png").display()
+        );
+    }
     let (field, frame) = render_field(snap, opts)?;
     let range_used = draw_png(snap, &field, &frame, opts, path)?;
     Ok(RenderedImage {
@@ -287,7 +294,9 @@ fn draw_to(
     let (size, _) = picture_size(frame);
     let root = BitMapBackend::new(path, size).into_drawing_area();
     draw_on(&root, snap, field, frame, opts, range)?;
-    root.present().map_err(|e| anyhow!("cannot draw: {e}"))?;
+    // plotters' error prints the encoder's debug text: say what failed instead.
+    root.present()
+        .map_err(|_| anyhow!("the PNG encoder could not write the file"))?;
     Ok(())
 }
 

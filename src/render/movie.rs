@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
-use crate::io::hdf5::read_snapshot;
+use crate::io::hdf5::read_snapshot_with_h;
 use crate::render::image::{RenderOptions, common_range, draw_png, render_field};
 use crate::simulation::SnapshotIndex;
 
@@ -25,7 +25,7 @@ pub fn render_run(run: &Path, opts: &RenderOptions, out: &Path) -> Result<Vec<Pa
     // Fields first (one range for all), then pictures.
     let mut fields = Vec::with_capacity(index.snapshots.len());
     for entry in &index.snapshots {
-        let snap = read_snapshot(&run.join(&entry.file))?.in_run_frame();
+        let snap = read_snapshot_with_h(&run.join(&entry.file))?.in_run_frame();
         let (field, frame) =
             render_field(&snap, opts).with_context(|| format!("rendering {}", entry.file))?;
         fields.push((snap, field, frame));
