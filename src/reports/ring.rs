@@ -13,7 +13,7 @@ use crate::io::hdf5::read_snapshot;
 use crate::io::summary::Summary;
 use crate::problems::ring::{exact, ring_l1, tau_at};
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
-use crate::simulation::SnapshotIndex;
+use crate::io::snapshot_index::SnapshotIndex;
 
 /// What the analysis wrote, and the L1 error at each τ.
 pub struct RingReport {
