@@ -790,7 +790,11 @@ fn check_applies(given: &toml::Table, kind: ProblemKind) -> Result<()> {
     if matches!(kind, Cv | File) {
         for key in ["n", "h_factor"] {
             if key_in("particles", key) {
-                let from = if kind == Cv { "the L1 stream" } else { "a file" };
+                let from = if kind == Cv {
+                    "the L1 stream"
+                } else {
+                    "a file"
+                };
                 return refuse(
                     format!("particles.{key}"),
                     &format!("the particles come from {from}; give particles.h"),
@@ -823,7 +827,10 @@ fn named_key(msg: &str) -> Option<String> {
 
 /// Whether the override `key=value` set `key` itself, a key inside it or the table holding it.
 fn override_touches(assignment: &str, key: &str) -> bool {
-    let set = assignment.split_once('=').map_or(assignment, |x| x.0).trim();
+    let set = assignment
+        .split_once('=')
+        .map_or(assignment, |x| x.0)
+        .trim();
     set == key || set.starts_with(&format!("{key}.")) || key.starts_with(&format!("{set}."))
 }
 

@@ -433,11 +433,8 @@ fn real_main(cli: Cli) -> Result<()> {
                     no_detrend,
                 },
         } => {
-            let report = sphdisk::reports::lightcurve::analyse_lightcurve(
-                &run,
-                skip_orbits,
-                !no_detrend,
-            )?;
+            let report =
+                sphdisk::reports::lightcurve::analyse_lightcurve(&run, skip_orbits, !no_detrend)?;
             print!("{}", report.summary());
             for f in &report.files {
                 println!("wrote {}", f.display());

@@ -136,7 +136,11 @@ pub fn run_distributed(comm: &mut dyn Comm, cfg: &Config, opts: &RunOptions) -> 
 
 /// [`resume`] on the ranks of `comm`
 /// (any number of ranks: the checkpoint holds every particle).
-pub fn resume_distributed(comm: &mut dyn Comm, overrides: &[String], opts: &RunOptions) -> Result<Ended> {
+pub fn resume_distributed(
+    comm: &mut dyn Comm,
+    overrides: &[String],
+    opts: &RunOptions,
+) -> Result<Ended> {
     // Rank 0 takes the folder's lock; the others, in other processes, must not see it.
     if comm.rank() == 0 {
         run_folder::refuse_if_held(&opts.out)?;

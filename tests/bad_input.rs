@@ -93,13 +93,21 @@ fn a_key_that_does_not_apply_to_the_problem_is_named() {
         ("sod.toml", "disk.r_in=0.5", "disk.r_in"),
         ("sedov.toml", "binary.q=0.1", "binary.q"),
         ("cv2d.toml", "particles.n=100", "particles.n"),
-        ("ring.toml", "output.lightcurve_interval=0.1", "output.lightcurve_interval"),
+        (
+            "ring.toml",
+            "output.lightcurve_interval=0.1",
+            "output.lightcurve_interval",
+        ),
     ] {
         assert_check_and_run_fail(
             d.path(),
             &problem(file),
             &[set],
-            &[&format!("key `{key}` does not apply"), "problem.kind", &format!("--set {set}")],
+            &[
+                &format!("key `{key}` does not apply"),
+                "problem.kind",
+                &format!("--set {set}"),
+            ],
         );
     }
     // In the file itself: the error names the file and the key.
@@ -120,7 +128,10 @@ fn set_errors_name_the_override_not_the_file() {
     let p = problem("sod.toml");
     for (set, words) in [
         ("foo.bar=1", &["--set foo.bar=1", "foo"][..]),
-        ("particles.h_factor=-2", &["--set particles.h_factor=-2", "particles.h_factor"]),
+        (
+            "particles.h_factor=-2",
+            &["--set particles.h_factor=-2", "particles.h_factor"],
+        ),
         ("eos.gamma=abc", &["--set eos.gamma=abc", "eos"]),
     ] {
         let (code, err) = sphdisk(d.path(), &["check", &p, "--set", set]);

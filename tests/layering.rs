@@ -120,7 +120,11 @@ fn analysis_depends_on_nothing_of_the_solver_the_set_ups_or_the_commands() {
             "config",
         ],
     );
-    assert!(v.is_empty(), "analysis/ crosses its layer:\n{}", v.join("\n"));
+    assert!(
+        v.is_empty(),
+        "analysis/ crosses its layer:\n{}",
+        v.join("\n")
+    );
 }
 
 #[test]
@@ -153,7 +157,11 @@ fn the_checker_sees_a_use_it_forbids() {
     );
     assert!(uses("// crate::simulation::run", "simulation").is_empty());
     assert_eq!(
-        uses("use crate::{\n    boundary::SimBox,\n    simulation::{Run, Team},\n};", "simulation").len(),
+        uses(
+            "use crate::{\n    boundary::SimBox,\n    simulation::{Run, Team},\n};",
+            "simulation"
+        )
+        .len(),
         1
     );
     assert!(uses("use crate::{io::{simulation, x}, y};", "simulation").is_empty());

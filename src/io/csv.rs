@@ -166,8 +166,13 @@ mod tests {
         // A missing required column is named, with what the file needs.
         std::fs::write(&path, "x,y,u\n0.1,0.2,1\n").unwrap();
         let e = read_particles::<2>(&path).unwrap_err().to_string();
-        assert!(e.contains("no column `m`") && e.contains("x, y, m, u"), "{e}");
-        let e = read_particles::<3>(&dir.path().join("p.csv")).unwrap_err().to_string();
+        assert!(
+            e.contains("no column `m`") && e.contains("x, y, m, u"),
+            "{e}"
+        );
+        let e = read_particles::<3>(&dir.path().join("p.csv"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("no column `z`"), "{e}");
     }
 }

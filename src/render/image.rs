@@ -753,10 +753,14 @@ mod tests {
         assert_eq!(common_range(&[&a, &b], Scale::Linear), (-1.0, 5.0));
         // Log: from the 1% quantile of the positive values, at most four decades.
         assert_eq!(common_range(&[&a, &b], Scale::Log), (0.5, 5.0));
-        let wide: Vec<f64> = (0..1000).map(|k| 10f64.powf(-8.0 + 8.0 * k as f64 / 999.0)).collect();
+        let wide: Vec<f64> = (0..1000)
+            .map(|k| 10f64.powf(-8.0 + 8.0 * k as f64 / 999.0))
+            .collect();
         assert_eq!(common_range(&[&wide], Scale::Log), (1e-4, 1.0));
         // A blast's shell over its background: the range spans the data, not 10⁴.
-        let shell: Vec<f64> = (0..1000).map(|k| 1.0 + 2.0 * (k % 7) as f64 / 6.0).collect();
+        let shell: Vec<f64> = (0..1000)
+            .map(|k| 1.0 + 2.0 * (k % 7) as f64 / 6.0)
+            .collect();
         assert_eq!(common_range(&[&shell], Scale::Log), (1.0, 3.0));
         assert_eq!(common_range(&[&[0.0, -2.0]], Scale::Log), (1e-4, 1.0));
         assert_eq!(common_range(&[&[3.0, 3.0]], Scale::Linear), (1.5, 4.5));

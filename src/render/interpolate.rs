@@ -1244,8 +1244,14 @@ mod tests {
         }
         let e = Extent::default_for(&snap, View::FaceOn).unwrap();
         let pad = KERNEL_SUPPORT * 0.1;
-        assert!((e.x.0 + 1.0 + pad).abs() < 1e-12 && (e.x.1 - 1.0 - pad).abs() < 1e-12, "{e:?}");
-        assert!((e.y.0 + 1.0 + pad).abs() < 1e-3 && (e.y.1 - 1.0 - pad).abs() < 1e-3, "{e:?}");
+        assert!(
+            (e.x.0 + 1.0 + pad).abs() < 1e-12 && (e.x.1 - 1.0 - pad).abs() < 1e-12,
+            "{e:?}"
+        );
+        assert!(
+            (e.y.0 + 1.0 + pad).abs() < 1e-3 && (e.y.1 - 1.0 - pad).abs() < 1e-3,
+            "{e:?}"
+        );
         // Particles that fill the box (a periodic one) give the box.
         snap.pos[0][0] = -9.99;
         snap.pos[0][1] = 9.99;
@@ -1272,11 +1278,16 @@ mod tests {
         for i in snap.len()..imaged.len() {
             let x = imaged.pos[0][i];
             let y = imaged.pos[1][i];
-            assert!(!((0.0..12.0).contains(&x) && (0.0..12.0).contains(&y)), "{x} {y}");
+            assert!(
+                !((0.0..12.0).contains(&x) && (0.0..12.0).contains(&y)),
+                "{x} {y}"
+            );
         }
         let full = column_density(&imaged, View::FaceOn, &frame).unwrap();
         let spread = |f: &[f64]| {
-            let (lo, hi) = f.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
+            let (lo, hi) = f
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
             (hi - lo) / hi
         };
         assert!(spread(&plain) > 0.3, "{}", spread(&plain));

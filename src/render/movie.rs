@@ -9,9 +9,7 @@ use anyhow::{Context, Result, bail};
 
 use crate::io::hdf5::read_snapshot;
 use crate::io::snapshot_index::snapshots_with_final;
-use crate::render::image::{
-    RenderOptions, common_range, default_extent, draw_png, render_field,
-};
+use crate::render::image::{RenderOptions, common_range, default_extent, draw_png, render_field};
 use crate::render::interpolate::Extent;
 
 /// Renders every snapshot of the run in `run` — those `snapshots.json` lists and the final
@@ -67,9 +65,9 @@ mod tests {
     use super::*;
     use crate::io::hdf5::{RunMetadata, Units, write_snapshot};
     use crate::io::snapshot::Snapshot;
+    use crate::io::snapshot_index::{SnapshotEntry, SnapshotIndex};
     use crate::render::interpolate::{Quantity, View};
     use crate::render::overlay::mass_ratio_of;
-    use crate::io::snapshot_index::{SnapshotEntry, SnapshotIndex};
 
     /// A run folder of a q = 0.2 binary with two snapshots of a small ring about the
     /// accretor, box (−1.5, −1) … (0.5, 1), as a 2D run writes them.

@@ -24,8 +24,8 @@ use plotters::prelude::*;
 
 use crate::analysis::roche::{self, Plane};
 use crate::io::hdf5::read_parameters;
-use crate::render::interpolate::{Frame, View};
 use crate::io::snapshot_index::snapshot_of;
+use crate::render::interpolate::{Frame, View};
 
 /// The colour of the overlay lines (white: no colour map reaches it).
 pub const OVERLAY_RGB: [u8; 3] = [255, 255, 255];

@@ -49,14 +49,14 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
 use crate::analysis::{roche, weighted_quantile};
-use crate::problems::cv::ECCENTRICITY_WINDOW;
-use crate::reports::run_config;
 use crate::config::ProblemKind;
 use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot;
 use crate::io::snapshot::Snapshot;
-use crate::physics::binary::{Binary, Region};
 use crate::io::snapshot_index::snapshots_with_final;
+use crate::physics::binary::{Binary, Region};
+use crate::problems::cv::ECCENTRICITY_WINDOW;
+use crate::reports::run_config;
 
 /// The annulus, in units of R90, whose 10° sectors are searched for the brightest one.
 pub const SPOT_ANNULUS: (f64, f64) = (0.8, 1.2);

@@ -31,9 +31,9 @@ use anyhow::{Context, Result, bail};
 use plotters::style::RGBColor;
 use serde::Serialize;
 
+use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
 use crate::reports::lightcurve::{self, LightcurveFigures};
 use crate::reports::superhump::{self, ModesRow, running_mean};
-use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
 
 /// Width of the running mean of the light curve, in orbits.
 pub const SMOOTH_ORBITS: f64 = 1.0;
@@ -258,8 +258,7 @@ pub fn analyse(
                 .filter(|r| r.t / TAU >= from && r.t / TAU <= e)
                 .copied()
                 .collect();
-            match lightcurve::analyse_range(&rows, 0.0, true, superhump::PERIOD_RANGE)
-            {
+            match lightcurve::analyse_range(&rows, 0.0, true, superhump::PERIOD_RANGE) {
                 Ok(LightcurveFigures {
                     period_orbits,
                     period_excess,
@@ -353,9 +352,8 @@ fn read(run: &Path, name: &str, what: &str) -> Result<String> {
 /// Reads a run's series and `run.toml`, analyses them, writes `outbursts.json`,
 /// `outbursts.png` and the `outbursts` key of `summary.json`.
 pub fn analyse_outbursts(run: &Path) -> Result<OutburstReport> {
-    let light =
-        lightcurve::parse_lightcurve(&read(run, "lightcurve.csv", "the light curve")?)
-            .with_context(|| run.join("lightcurve.csv").display().to_string())?;
+    let light = lightcurve::parse_lightcurve(&read(run, "lightcurve.csv", "the light curve")?)
+        .with_context(|| run.join("lightcurve.csv").display().to_string())?;
     let (light, _) = lightcurve::supersede(&light);
     let monitor = parse_monitor(&read(run, "monitor.csv", "the disk's monitor")?)
         .with_context(|| run.join("monitor.csv").display().to_string())?;

@@ -51,10 +51,10 @@ use anyhow::{Context, Result, bail};
 use plotters::style::RGBColor;
 use serde::Serialize;
 
-use crate::reports::lightcurve::{self, LightcurveFigures};
 use crate::analysis::roche;
 use crate::io::atomic::write_atomic;
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
+use crate::reports::lightcurve::{self, LightcurveFigures};
 
 /// Header of `modes.csv`.
 pub const HEADER: &str = crate::io::timeseries::MODES_HEADER;
@@ -436,8 +436,7 @@ pub fn analyse(
     } else {
         None
     };
-    let light: Vec<lightcurve::Row> =
-        light.iter().filter(|r| r.t / TAU <= to).copied().collect();
+    let light: Vec<lightcurve::Row> = light.iter().filter(|r| r.t / TAU <= to).copied().collect();
     let lc = match light.first() {
         Some(first) => {
             let skip = (from - first.t / TAU).max(0.0);
@@ -530,18 +529,10 @@ pub fn analyse_superhump(run: &Path) -> Result<SuperhumpReport> {
     }
     if let Some(l) = &f.lightcurve {
         let png = run.join("superhump_lightcurve.png");
-        plot_panels(
-            &png,
-            (1800, 600),
-            &lightcurve::lightcurve_panels(&light, l),
-        )?;
+        plot_panels(&png, (1800, 600), &lightcurve::lightcurve_panels(&light, l))?;
         files.push(png);
         let png = run.join("superhump_periodogram.png");
-        plot_panels(
-            &png,
-            (1100, 550),
-            &[lightcurve::periodogram_panel(l)],
-        )?;
+        plot_panels(&png, (1100, 550), &[lightcurve::periodogram_panel(l)])?;
         files.push(png);
     }
     files.push(crate::io::summary::write_analysis(
