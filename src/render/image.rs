@@ -245,7 +245,16 @@ fn default_title(snap: &Snapshot, opts: &RenderOptions) -> String {
         (_, v) if q == Quantity::ColumnDensity => format!("{v}"),
         (_, v) => format!("{v}, column-weighted along {}", los_axis(v)),
     };
-    format!("{}, {where_}", q.label())
+    format!("{}, {where_}", quantity_label(opts))
+}
+
+/// The quantity's name in the title and on the colour bar: with physical units the
+/// temperature is T in K, not P/ρ.
+fn quantity_label(opts: &RenderOptions) -> &'static str {
+    match (opts.quantity, &opts.units) {
+        (Quantity::Temperature, Some(_)) => "T (temperature)",
+        (q, _) => q.label(),
+    }
 }
 
 fn los_axis(view: View) -> &'static str {
@@ -472,10 +481,7 @@ fn draw_on<DB: DrawingBackend>(
         Scale::Log => v + factor.log10(),
         Scale::Linear => v * factor,
     };
-    let label = match (opts.quantity, &opts.units) {
-        (Quantity::Temperature, Some(_)) => "T (temperature)",
-        (q, _) => q.label(),
-    };
+    let label = quantity_label(opts);
     let bar_ticks = ticks_for(to_cgs(a_hi) - to_cgs(a_lo));
     let bar_label = |v: &f64| bar_ticks(&to_cgs(*v));
     bar.configure_mesh()
@@ -776,5 +782,48 @@ mod tests {
         assert_eq!(tick(&2.0e6), "2e6");
         assert_eq!(ticks_for(0.6)(&-2.78e-17), "0");
         assert_eq!(ticks_for(0.6)(&0.1), "0.1");
+    }
+
+    #[test]
+    fn physical_units_are_read_for_axes_and_colour_bar() {
+        use crate::io::hdf5::{RunMetadata, read_periodic, read_units, write_snapshot};
+        let dir = tempfile::tempdir().unwrap();
+        let snap = cloud(3);
+        let units = Units {
+            mass_cgs: 2e33,
+            length_cgs: 1.5e13,
+            time_cgs: 3.15e7,
+            mean_molecular_weight: 2.3,
+        };
+        let meta = RunMetadata {
+            parameters: [("units.mean_molecular_weight".to_string(), "2.3".to_string())].into(),
+            units,
+            periodic: true,
+            physical: true,
+        };
+        let path = dir.path().join("physical.hdf5");
+        write_snapshot(&path, &snap, &meta, 1).unwrap();
+        assert_eq!(read_units(&path).unwrap(), Some(units));
+        assert!(read_periodic(&path).unwrap());
+        // G = 1 code units: none, and the pictures say "code units".
+        let plain = dir.path().join("plain.hdf5");
+        write_snapshot(&plain, &snap, &RunMetadata::default(), 1).unwrap();
+        assert_eq!(read_units(&plain).unwrap(), None);
+        assert!(!read_periodic(&plain).unwrap());
+        let (k, name) = Quantity::Temperature.cgs(3, &units);
+        assert_eq!((k, name.as_str()), (units.kelvin_per_specific_energy(), "K"));
+        let (k, name) = Quantity::ColumnDensity.cgs(3, &units);
+        assert_eq!((k, name.as_str()), (2e33 / (1.5e13 * 1.5e13), "g cm⁻²"));
+        // Drawn: a picture with units differs from one without (labels in cm and K).
+        let mut opts = RenderOptions::new(Quantity::Temperature, View::FaceOn);
+        opts.resolution = (40, 40);
+        let a = render_png(&snap, &opts, &dir.path().join("a.png")).unwrap();
+        opts.units = Some(units);
+        let b = render_png(&snap, &opts, &dir.path().join("b.png")).unwrap();
+        assert_eq!(a.field, b.field);
+        assert_ne!(
+            std::fs::read(dir.path().join("a.png")).unwrap(),
+            std::fs::read(dir.path().join("b.png")).unwrap()
+        );
     }
 }
