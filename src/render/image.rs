@@ -811,7 +811,10 @@ mod tests {
         assert_eq!(read_units(&plain).unwrap(), None);
         assert!(!read_periodic(&plain).unwrap());
         let (k, name) = Quantity::Temperature.cgs(3, &units);
-        assert_eq!((k, name.as_str()), (units.kelvin_per_specific_energy(), "K"));
+        assert_eq!(
+            (k, name.as_str()),
+            (units.kelvin_per_specific_energy(), "K")
+        );
         let (k, name) = Quantity::ColumnDensity.cgs(3, &units);
         assert_eq!((k, name.as_str()), (2e33 / (1.5e13 * 1.5e13), "g cm⁻²"));
         // Drawn: a picture with units differs from one without (labels in cm and K).
