@@ -475,7 +475,16 @@ impl Config {
         for o in overrides {
             apply_override(&mut table, o)?;
         }
-        let mut cfg = Self::from_table(table).with_context(|| path.display().to_string())?;
+        let mut cfg = Self::from_table(table).map_err(|e| {
+            // An error about a key an override set names the override, not the file.
+            let blamed = named_key(&format!("{e:#}")).and_then(|key| {
+                overrides
+                    .iter()
+                    .find(|o| override_touches(o, &key))
+                    .map(|o| format!("--set {o}"))
+            });
+            e.context(blamed.unwrap_or_else(|| path.display().to_string()))
+        })?;
         if cfg.problem.name.is_none() {
             cfg.problem.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());
         }
@@ -494,8 +503,9 @@ impl Config {
     /// reported with their dotted path.
     pub fn from_table(table: toml::Table) -> Result<Self> {
         check_finite("", &table)?;
-        let cfg: Config = serde_path_to_error::deserialize(toml::Value::Table(table.clone()))
-            .map_err(|e| {
+        let given = table.clone();
+        let cfg: Config =
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
                 let path = e.path().to_string();
                 // toml appends "\nin `table`"; the dotted path says it already.
                 let inner = e.into_inner().to_string();
@@ -507,9 +517,10 @@ impl Config {
                 }
             })?;
         if let Ok(toml::Value::Table(read)) = toml::Value::try_from(&cfg) {
-            check_shapes("", &table, &read)?;
+            check_shapes("", &given, &read)?;
         }
         cfg.validate()?;
+        check_applies(&given, cfg.problem.kind)?;
         Ok(cfg)
     }
 
@@ -718,27 +729,7 @@ impl Config {
         if d < 2 && self.boundary.y.is_some() {
             bail!("key `boundary.y`: a 1D problem has no y axis");
         }
-        // Parameter tables of other problem kinds are a mistake worth naming.
         let kind = self.problem.kind;
-        for (table, present, owner) in [
-            ("sod", self.sod.is_some(), ProblemKind::Sod),
-            (
-                "advection",
-                self.advection.is_some(),
-                ProblemKind::Advection,
-            ),
-            ("sedov", self.sedov.is_some(), ProblemKind::Sedov),
-            ("ring", self.ring.is_some(), ProblemKind::Ring),
-            ("disk", self.disk.is_some(), ProblemKind::Disk),
-            ("initial", self.initial.is_some(), ProblemKind::File),
-        ] {
-            if present && kind != owner {
-                bail!(
-                    "table `[{table}]` does not apply to problem.kind = \"{}\"",
-                    kind.name()
-                );
-            }
-        }
         if kind == ProblemKind::File && self.initial.is_none() {
             bail!(
                 "key `initial.file`: missing (problem.kind = \"file\" reads its particles from it)"
@@ -819,6 +810,103 @@ fn check_shapes(prefix: &str, given: &toml::Table, read: &toml::Table) -> Result
         }
     }
     Ok(())
+}
+
+/// Keys the problem's kind does not use are errors naming the key: another kind's own
+/// table (`sedov.*` on a ring), a central mass where nothing orbits (`gravity.*` on a
+/// shock tube, an advected pulse or a blast), a binary, its stream, its disk or its light
+/// curve outside a cv problem, and a lattice resolution (`particles.n`, `h_factor`) where
+/// the particles come from a file or a stream (they take `particles.h`).
+fn check_applies(given: &toml::Table, kind: ProblemKind) -> Result<()> {
+    use ProblemKind::*;
+    let owner = |table: &str| match table {
+        "sod" => Some(Sod),
+        "advection" => Some(Advection),
+        "sedov" => Some(Sedov),
+        "ring" => Some(Ring),
+        "disk" => Some(Disk),
+        "initial" => Some(File),
+        "binary" | "stream" | "initial_disk" => Some(Cv),
+        _ => None,
+    };
+    let first_key = |table: &str| -> String {
+        match given.get(table) {
+            Some(toml::Value::Table(t)) if !t.is_empty() => {
+                format!("{table}.{}", t.keys().next().expect("non-empty"))
+            }
+            _ => table.to_string(),
+        }
+    };
+    let refuse = |key: String, why: &str| -> Result<()> {
+        bail!(
+            "key `{key}` does not apply to problem.kind = \"{}\" ({why})",
+            kind.name()
+        )
+    };
+    for table in given.keys() {
+        if let Some(owner) = owner(table)
+            && owner != kind
+        {
+            return refuse(
+                first_key(table),
+                &format!("it belongs to problem.kind = \"{}\"", owner.name()),
+            );
+        }
+        if table == "gravity" && matches!(kind, Sod | Advection | Sedov) {
+            return refuse(first_key(table), "nothing orbits a central mass there");
+        }
+    }
+    let key_in = |table: &str, key: &str| {
+        given
+            .get(table)
+            .and_then(|t| t.as_table())
+            .is_some_and(|t| t.contains_key(key))
+    };
+    if matches!(kind, Cv | File) {
+        for key in ["n", "h_factor"] {
+            if key_in("particles", key) {
+                let from = if kind == Cv {
+                    "the L1 stream"
+                } else {
+                    "a file"
+                };
+                return refuse(
+                    format!("particles.{key}"),
+                    &format!("the particles come from {from}; give particles.h"),
+                );
+            }
+        }
+    }
+    if kind != Cv && key_in("output", "lightcurve_interval") {
+        return refuse(
+            "output.lightcurve_interval".into(),
+            "only a cv problem writes a light curve",
+        );
+    }
+    Ok(())
+}
+
+/// The dotted key an error message names first (`key `a.b``, `table `[a]``, or an
+/// unknown top-level `unknown field `a``).
+fn named_key(msg: &str) -> Option<String> {
+    let after = |marker: &str, end: char| {
+        msg.find(marker).and_then(|i| {
+            let rest = &msg[i + marker.len()..];
+            rest.find(end).map(|j| rest[..j].to_string())
+        })
+    };
+    after("key `", '`')
+        .or_else(|| after("table `[", ']'))
+        .or_else(|| after("unknown field `", '`'))
+}
+
+/// Whether the override `key=value` set `key` itself, a key inside it or the table holding it.
+fn override_touches(assignment: &str, key: &str) -> bool {
+    let set = assignment
+        .split_once('=')
+        .map_or(assignment, |x| x.0)
+        .trim();
+    set == key || set.starts_with(&format!("{key}.")) || key.starts_with(&format!("{set}."))
 }
 
 /// Joins a multi-line message into one line.
@@ -907,7 +995,7 @@ mod tests {
         let e = load(SOD, &["eos.gamma=0.5"]).unwrap_err().to_string();
         assert!(e.contains("eos.gamma"), "{e}");
         let e = load(SOD, &["sedov.energy=1"]).unwrap_err().to_string();
-        assert!(e.contains("[sedov]"), "{e}");
+        assert!(e.contains("key `sedov.energy` does not apply"), "{e}");
         let e = load(SOD, &["boundary.z=open"]).unwrap_err().to_string();
         assert!(e.contains("boundary.z"), "{e}");
     }

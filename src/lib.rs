@@ -18,6 +18,7 @@ pub mod particles;
 pub mod physics;
 pub mod problems;
 pub mod render;
+pub mod reports;
 pub mod rng;
 pub mod signals;
 pub mod simulation;

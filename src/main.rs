@@ -327,8 +327,8 @@ fn execute_mpi(job: &Job) -> Option<Result<Ended>> {
     let mut comm = MpiComm::new(world);
     install_abort_on_panic(comm.rank());
     let ended = match job {
-        Job::Fresh(cfg, opts) => sphdisk::domain::team::run(&mut comm, cfg, opts),
-        Job::Resume(sets, opts) => sphdisk::domain::team::resume(&mut comm, sets, opts),
+        Job::Fresh(cfg, opts) => sphdisk::simulation::run_distributed(&mut comm, cfg, opts),
+        Job::Resume(sets, opts) => sphdisk::simulation::resume_distributed(&mut comm, sets, opts),
     };
     match ended {
         Ok(ended) => {
@@ -401,7 +401,7 @@ fn real_main(cli: Cli) -> Result<()> {
         Command::Analyse {
             what: AnalyseCommand::Ring { run },
         } => {
-            let report = sphdisk::analysis::ring_report::analyse_ring(&run)?;
+            let report = sphdisk::reports::ring::analyse_ring(&run)?;
             for (tau, l1) in &report.l1 {
                 println!("tau = {tau:.4}: L1 of the averaged Σ = {:.2}%", 100.0 * l1);
             }
@@ -413,7 +413,7 @@ fn real_main(cli: Cli) -> Result<()> {
         Command::Analyse {
             what: AnalyseCommand::Disk { run },
         } => {
-            let report = sphdisk::analysis::disk_report::analyse_disk(&run)?;
+            let report = sphdisk::reports::disk::analyse_disk(&run)?;
             println!(
                 "      t  r10 (pred)       r50 (pred)       r90 (pred)       Σ L1   M(<R) L1  α_eff   v_R/c_s"
             );
@@ -439,7 +439,7 @@ fn real_main(cli: Cli) -> Result<()> {
         Command::Analyse {
             what: AnalyseCommand::Sod { run },
         } => {
-            for f in sphdisk::analysis::sod_report::analyse_sod(&run)? {
+            for f in sphdisk::reports::sod::analyse_sod(&run)? {
                 println!("wrote {}", f.display());
             }
             Ok(())
@@ -452,11 +452,8 @@ fn real_main(cli: Cli) -> Result<()> {
                     no_detrend,
                 },
         } => {
-            let report = sphdisk::analysis::lightcurve_report::analyse_lightcurve(
-                &run,
-                skip_orbits,
-                !no_detrend,
-            )?;
+            let report =
+                sphdisk::reports::lightcurve::analyse_lightcurve(&run, skip_orbits, !no_detrend)?;
             print!("{}", report.summary());
             for f in &report.files {
                 println!("wrote {}", f.display());
@@ -466,7 +463,7 @@ fn real_main(cli: Cli) -> Result<()> {
         Command::Analyse {
             what: AnalyseCommand::Superhump { runs, out },
         } => {
-            use sphdisk::analysis::superhump_report as sh;
+            use sphdisk::reports::superhump as sh;
             let mut reports = Vec::new();
             for run in &runs {
                 let report = sh::analyse_superhump(run)?;
@@ -496,7 +493,7 @@ fn real_main(cli: Cli) -> Result<()> {
         Command::Analyse {
             what: AnalyseCommand::Outbursts { run },
         } => {
-            let report = sphdisk::analysis::outburst_report::analyse_outbursts(&run)?;
+            let report = sphdisk::reports::outbursts::analyse_outbursts(&run)?;
             print!("{}", report.summary());
             for f in &report.files {
                 println!("wrote {}", f.display());
@@ -506,7 +503,7 @@ fn real_main(cli: Cli) -> Result<()> {
         Command::Analyse {
             what: AnalyseCommand::Cv { run },
         } => {
-            let report = sphdisk::analysis::cv_report::analyse_cv(&run)?;
+            let report = sphdisk::reports::cv::analyse_cv(&run)?;
             print!("{}", report.summary());
             for f in &report.files {
                 println!("wrote {}", f.display());
@@ -540,6 +537,10 @@ fn real_main(cli: Cli) -> Result<()> {
             opts.slice_z = slice_z;
             if !no_roche {
                 opts.roche_q = sphdisk::render::overlay::mass_ratio_of(&input)?;
+            }
+            if let Some(first) = sphdisk::io::snapshot_index::snapshot_of(&input)? {
+                opts.units = sphdisk::io::hdf5::read_units(&first)?;
+                opts.periodic = sphdisk::io::hdf5::read_periodic(&first)?;
             }
             match (xlim, ylim) {
                 (None, None) => {}

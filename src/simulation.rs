@@ -14,6 +14,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::boundary::{BoundaryKind, SimBox};
 use crate::config::{Config, WindowKind};
+use crate::domain::comm::Comm;
+use crate::domain::team::{Distributed, Solo, Team};
 use crate::integrate::{StepControl, kdk_step_with, rhs, time_step};
 use crate::io::atomic::write_atomic;
 use crate::io::checkpoint::{self, CheckpointText};
@@ -22,6 +24,7 @@ use crate::io::hdf5::{RunMetadata, read_snapshot, write_snapshot};
 use crate::io::log::RunLog;
 use crate::io::run_folder::{self, FolderLock};
 use crate::io::snapshot::{PointMassRecord, Snapshot};
+use crate::io::snapshot_index::{SnapshotEntry, SnapshotIndex};
 use crate::io::summary::{
     AccretionLedger, Conservation, Flow, MassBudget, MassBudgetRecord, Summary, TotalsRecord,
     peak_rss_bytes,
@@ -33,7 +36,7 @@ use crate::particles::Particles;
 use crate::physics::l1_stream::InjectorState;
 use crate::physics::mass_transfer::MassTransfer;
 use crate::problems::{self, InitialState};
-use crate::sweep::{Physics, SweepStats, Window};
+use crate::sweep::{Physics, Window};
 
 /// Default wall-clock seconds between checkpoints.
 const CHECKPOINT_WALL_SECONDS: f64 = 600.0;
@@ -118,6 +121,36 @@ pub fn resume(overrides: &[String], opts: &RunOptions) -> Result<Ended> {
         2 => Ok(resume_with_state::<2>(overrides, opts)?.ended),
         _ => Ok(resume_with_state::<3>(overrides, opts)?.ended),
     }
+}
+
+/// [`run`] on the ranks of `comm` (each rank calls this; rank 0 writes).
+pub fn run_distributed(comm: &mut dyn Comm, cfg: &Config, opts: &RunOptions) -> Result<Ended> {
+    let mut team = Distributed::new(comm);
+    Ok(match cfg.dimension() {
+        1 => run_in_team::<1>(cfg, opts, &mut team)?.ended,
+        2 => run_in_team::<2>(cfg, opts, &mut team)?.ended,
+        3 => run_in_team::<3>(cfg, opts, &mut team)?.ended,
+        d => bail!("key `problem.dimension`: must be 1, 2 or 3, got {d}"),
+    })
+}
+
+/// [`resume`] on the ranks of `comm`
+/// (any number of ranks: the checkpoint holds every particle).
+pub fn resume_distributed(
+    comm: &mut dyn Comm,
+    overrides: &[String],
+    opts: &RunOptions,
+) -> Result<Ended> {
+    // Rank 0 takes the folder's lock; the others, in other processes, must not see it.
+    if comm.rank() == 0 {
+        run_folder::refuse_if_held(&opts.out)?;
+    }
+    let mut team = Distributed::new(comm);
+    Ok(match resume_dimension(overrides, opts)? {
+        1 => resume_in_team::<1>(overrides, opts, &mut team)?.ended,
+        2 => resume_in_team::<2>(overrides, opts, &mut team)?.ended,
+        _ => resume_in_team::<3>(overrides, opts, &mut team)?.ended,
+    })
 }
 
 /// The dimension of the run in `opts.out`: that of its newest checkpoint that passes every
@@ -276,75 +309,6 @@ fn load_checkpoint<const D: usize>(
             .extend(times.into_iter().filter(|&x| x > t * (1.0 + 1e-12)));
     }
     Ok(Resumable { cfg, st, p, bx })
-}
-
-/// The processes a run is spread over, as the step loop sees them: one process ([`Solo`]),
-/// or the ranks of a distributed run (`domain::team`). Every rank runs the same loop on its
-/// own particles; the team evaluates right-hand sides together, reduces figures to global
-/// ones, and collects the particles on rank 0 for output. Every call is collective: all
-/// ranks make it, in the same order.
-pub trait Team<const D: usize> {
-    /// Whether this process writes the outputs.
-    fn is_root(&self) -> bool;
-    fn ranks(&self) -> usize;
-    /// Keeps this rank's share of the whole particle set (at the start of a run).
-    fn distribute(&mut self, p: &mut Particles<D>, bx: &SimBox<D>);
-    /// New accelerations and du/dt of this rank's particles (with external gravity).
-    fn evaluate(
-        &mut self,
-        p: &mut Particles<D>,
-        bx: &SimBox<D>,
-        phys: &Physics<D>,
-        window: Window,
-    ) -> SweepStats;
-    /// Element-wise sum, min or max over the ranks, in place.
-    fn sum(&mut self, x: &mut [f64]);
-    fn min(&mut self, x: &mut [f64]);
-    fn max(&mut self, x: &mut [f64]);
-    /// Particles inserted on this rank since the last step (a binary's L1 stream) go to the
-    /// ranks that own their places, by the same path as migration.
-    fn adopt(&mut self, p: &mut Particles<D>);
-    /// Every particle, on rank 0 (in id order); None on the other ranks.
-    fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>>;
-    /// After a step: move particles to their new owners, rebalance the load.
-    fn between_steps(&mut self, p: &mut Particles<D>, step: u64, log: &mut RunLog) -> Result<()>;
-    /// Figures of the distribution for `summary.json` (collective; None on one process).
-    fn record(&mut self) -> Option<serde_json::Value>;
-}
-
-/// One process, with threads.
-pub struct Solo;
-
-impl<const D: usize> Team<D> for Solo {
-    fn is_root(&self) -> bool {
-        true
-    }
-    fn ranks(&self) -> usize {
-        1
-    }
-    fn distribute(&mut self, _: &mut Particles<D>, _: &SimBox<D>) {}
-    fn evaluate(
-        &mut self,
-        p: &mut Particles<D>,
-        bx: &SimBox<D>,
-        phys: &Physics<D>,
-        window: Window,
-    ) -> SweepStats {
-        rhs(p, bx, phys, window)
-    }
-    fn sum(&mut self, _: &mut [f64]) {}
-    fn min(&mut self, _: &mut [f64]) {}
-    fn max(&mut self, _: &mut [f64]) {}
-    fn adopt(&mut self, _: &mut Particles<D>) {}
-    fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>> {
-        Some(p.clone())
-    }
-    fn between_steps(&mut self, _: &mut Particles<D>, _: u64, _: &mut RunLog) -> Result<()> {
-        Ok(())
-    }
-    fn record(&mut self) -> Option<serde_json::Value> {
-        None
-    }
 }
 
 /// Global totals of the particles of every rank.
@@ -1254,7 +1218,7 @@ fn write_series<const D: usize>(
         f.escaped.mass,
         v[5],
     ])?;
-    let (w_lo, w_hi) = crate::analysis::cv_report::ECCENTRICITY_WINDOW;
+    let (w_lo, w_hi) = problems::cv::ECCENTRICITY_WINDOW;
     let mut sums = problems::cv::mode_sums(b, p, w_lo * r_disk, w_hi * r_disk);
     team.sum(&mut sums);
     let modes = problems::cv::DiskModes::from_sums(&sums);
@@ -1414,41 +1378,6 @@ fn binary_record(mt: &MassTransfer, cfg: &Config) -> serde_json::Value {
         v["period_days"] = serde_json::json!(p);
     }
     v
-}
-
-/// Snapshots written so far, listed in `snapshots.json` (file, time, step) so that tools
-/// can find each snapshot's time.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct SnapshotIndex {
-    pub snapshots: Vec<SnapshotEntry>,
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct SnapshotEntry {
-    /// The snapshot's name; with `files` > 1 its parts are `snap_NNNN.k.hdf5`.
-    pub file: String,
-    pub time: f64,
-    pub step: u64,
-    #[serde(default = "one_file")]
-    pub files: usize,
-}
-
-fn one_file() -> usize {
-    1
-}
-
-impl SnapshotIndex {
-    pub fn read(dir: &Path) -> Result<Self> {
-        let path = dir.join("snapshots.json");
-        let text = std::fs::read_to_string(&path).with_context(|| {
-            format!(
-                "cannot read {} (a run folder lists its snapshots there)",
-                path.display()
-            )
-        })?;
-        serde_json::from_str(&text)
-            .with_context(|| format!("{} is not a snapshot index", path.display()))
-    }
 }
 
 fn progress_bar(show: bool) -> ProgressBar {

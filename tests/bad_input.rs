@@ -84,6 +84,66 @@ fn unknown_key_is_named() {
 }
 
 #[test]
+fn a_key_that_does_not_apply_to_the_problem_is_named() {
+    let d = tempfile::tempdir().unwrap();
+    for (file, set, key) in [
+        ("sod.toml", "gravity.gm=1", "gravity.gm"),
+        ("sedov.toml", "gravity.gm=1", "gravity.gm"),
+        ("ring.toml", "sedov.energy=2", "sedov.energy"),
+        ("sod.toml", "disk.r_in=0.5", "disk.r_in"),
+        ("sedov.toml", "binary.q=0.1", "binary.q"),
+        ("cv2d.toml", "particles.n=100", "particles.n"),
+        (
+            "ring.toml",
+            "output.lightcurve_interval=0.1",
+            "output.lightcurve_interval",
+        ),
+    ] {
+        assert_check_and_run_fail(
+            d.path(),
+            &problem(file),
+            &[set],
+            &[
+                &format!("key `{key}` does not apply"),
+                "problem.kind",
+                &format!("--set {set}"),
+            ],
+        );
+    }
+    // In the file itself: the error names the file and the key.
+    let sod = d.path().join("sod_with_gravity.toml");
+    let text = std::fs::read_to_string(problem("sod.toml")).unwrap();
+    std::fs::write(&sod, format!("{text}\n[gravity]\ngm = 1.0\n")).unwrap();
+    let (code, err) = sphdisk(d.path(), &["check", sod.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("sod_with_gravity.toml") && err.contains("key `gravity.gm` does not apply"),
+        "{err}"
+    );
+}
+
+#[test]
+fn set_errors_name_the_override_not_the_file() {
+    let d = tempfile::tempdir().unwrap();
+    let p = problem("sod.toml");
+    for (set, words) in [
+        ("foo.bar=1", &["--set foo.bar=1", "foo"][..]),
+        (
+            "particles.h_factor=-2",
+            &["--set particles.h_factor=-2", "particles.h_factor"],
+        ),
+        ("eos.gamma=abc", &["--set eos.gamma=abc", "eos"]),
+    ] {
+        let (code, err) = sphdisk(d.path(), &["check", &p, "--set", set]);
+        assert_ne!(code, 0);
+        for w in words {
+            assert!(err.contains(w), "`{w}` not in: {err}");
+        }
+        assert!(!err.contains("sod.toml"), "names the file: {err}");
+    }
+}
+
+#[test]
 fn missing_required_key_is_named() {
     let d = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(problem("sod.toml"))

@@ -193,7 +193,7 @@ fn a_run_resumes_on_another_number_of_ranks_with_the_same_result() {
     assert!(matches!(stopped, Ended::Stopped { step: 3, .. }));
     let opts = RunOptions::quiet(&out);
     let mut resumed = ThreadComm::run(2, |c| {
-        sphdisk::domain::team::resume(c, &[], &opts).expect("resume")
+        sphdisk::simulation::resume_distributed(c, &[], &opts).expect("resume")
     });
     let resumed = finished(resumed.swap_remove(0));
     assert_same_run(&straight, &resumed, &[]);

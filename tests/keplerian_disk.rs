@@ -10,7 +10,7 @@
 
 mod common;
 use common::{error, run_problem};
-use sphdisk::analysis::disk_report::analyse_disk;
+use sphdisk::reports::disk::analyse_disk;
 
 #[test]
 fn thin_disk_keeps_its_shape_and_follows_its_viscosity_for_four_orbits() {

@@ -41,7 +41,7 @@ fn below_sigma_max_the_gas_stays_exactly_on_the_cold_branch() {
     // du/dt = −(u − u_c) Ω/β is exactly 0 at u = u_c: only round-off of u_c itself.
     assert!(worst < 1e-12, "largest |u − u_c|/u_c = {worst}");
     let monitor = std::fs::read_to_string(run.dir.path().join("monitor.csv")).unwrap();
-    let rows = sphdisk::analysis::outburst_report::parse_monitor(&monitor).unwrap();
+    let rows = sphdisk::reports::outbursts::parse_monitor(&monitor).unwrap();
     assert!(rows.iter().all(|r| r.hot_mass == 0.0));
     // The stream's particles entered cold too (stream.cs = cs_cold).
     assert!(
@@ -112,7 +112,7 @@ fn the_analysis_sees_a_hot_disk_cooling_as_an_outburst() {
             &format!("time.end={}", 10.0 * TAU),
         ],
     );
-    let report = sphdisk::analysis::outburst_report::analyse_outbursts(run.dir.path()).unwrap();
+    let report = sphdisk::reports::outbursts::analyse_outbursts(run.dir.path()).unwrap();
     let f = &report.figures;
     // ν falls by (α_h/α_c)(c_h/c_c)² = 82 as the disk cools: the light from the start is
     // more than 1 mag above the cold disk's (quiescence: the 5% quantile after orbit 2), and

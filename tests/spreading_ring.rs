@@ -5,7 +5,7 @@
 mod common;
 use common::{error, run_problem};
 
-use sphdisk::analysis::ring_report::analyse_ring;
+use sphdisk::reports::ring::analyse_ring;
 
 #[test]
 fn ring_follows_the_exact_solution() {
@@ -73,7 +73,7 @@ fn accretion_ledger_balances_to_round_off() {
 }
 
 fn r_initial_count(r: &common::Run<2>) -> u64 {
-    let snaps = sphdisk::simulation::SnapshotIndex::read(r.dir.path()).unwrap();
+    let snaps = sphdisk::io::snapshot_index::SnapshotIndex::read(r.dir.path()).unwrap();
     let first = r.dir.path().join(&snaps.snapshots[0].file);
     sphdisk::io::hdf5::read_snapshot(&first).unwrap().len() as u64
 }

@@ -45,7 +45,7 @@ fn the_initial_disk_stays_circular_and_the_budget_closes() {
     }
     assert!(me / m < 0.05, "mean eccentricity {}", me / m);
     let modes = std::fs::read_to_string(run.dir.path().join("modes.csv")).unwrap();
-    let rows = sphdisk::analysis::superhump_report::parse_modes(&modes).unwrap();
+    let rows = sphdisk::reports::superhump::parse_modes(&modes).unwrap();
     // One row every P_orb/50 from t = 0.
     assert!((50..=52).contains(&rows.len()), "{} rows", rows.len());
     let last = rows.last().unwrap();

@@ -2,42 +2,15 @@
 //! (error norms, binned profiles, front positions).
 
 pub mod advection;
-pub mod cv_report;
-pub mod disk_report;
-pub mod lightcurve_report;
 pub mod observer;
-pub mod outburst_report;
 pub mod periodogram;
 pub mod riemann;
 pub mod ring;
-pub mod ring_report;
 pub mod roche;
 pub mod sedov;
-pub mod sod_report;
-pub mod superhump_report;
 pub mod viscous_disk;
 
-use std::path::Path;
-
-use anyhow::{Context, Result, bail};
-
-use crate::config::{Config, ProblemKind};
 use crate::particles::Particles;
-
-/// The problem file a run saved (`run.toml` in its folder), which must be of `kind`;
-/// `what` names that kind in the error ("a shock-tube run").
-pub fn run_config(run: &Path, kind: ProblemKind, what: &str) -> Result<Config> {
-    let cfg = Config::load(&run.join("run.toml"), &[])
-        .with_context(|| format!("{}: the run's problem file (run.toml)", run.display()))?;
-    if cfg.problem.kind != kind {
-        bail!(
-            "{}: not {what} (problem.kind = \"{}\")",
-            run.display(),
-            cfg.problem.kind.name()
-        );
-    }
-    Ok(cfg)
-}
 
 /// The `fraction` quantile of values weighted by masses, (value, mass) pairs: the value at
 /// which the mass sorted by value reaches `fraction` of the total; None without mass.

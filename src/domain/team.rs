@@ -15,11 +15,9 @@ use super::comm::Comm;
 use super::decomposition::{Decomposition, coords};
 use super::exchange::{self, ExchangeStats};
 use crate::boundary::SimBox;
-use crate::config::Config;
-use crate::integrate::add_external;
+use crate::integrate::{add_external, rhs};
 use crate::io::log::RunLog;
 use crate::particles::Particles;
-use crate::simulation::{self, Ended, RunOptions, Team};
 use crate::sweep::{Physics, SweepStats, Window};
 
 /// Imbalance (max/mean interactions − 1) above which the cuts move between steps.
@@ -28,6 +26,75 @@ pub const REBALANCE_THRESHOLD: f64 = 0.03;
 const CUT_SAMPLE: usize = 400_000;
 /// Imbalance history kept for `summary.json`: every step up to this many, then thinned.
 const HISTORY: usize = 2000;
+
+/// The processes a run is spread over, as the step loop sees them: one process ([`Solo`]),
+/// or the ranks of a distributed run ([`Distributed`]). Every rank runs the same loop on its
+/// own particles; the team evaluates right-hand sides together, reduces figures to global
+/// ones, and collects the particles on rank 0 for output. Every call is collective: all
+/// ranks make it, in the same order.
+pub trait Team<const D: usize> {
+    /// Whether this process writes the outputs.
+    fn is_root(&self) -> bool;
+    fn ranks(&self) -> usize;
+    /// Keeps this rank's share of the whole particle set (at the start of a run).
+    fn distribute(&mut self, p: &mut Particles<D>, bx: &SimBox<D>);
+    /// New accelerations and du/dt of this rank's particles (with external gravity).
+    fn evaluate(
+        &mut self,
+        p: &mut Particles<D>,
+        bx: &SimBox<D>,
+        phys: &Physics<D>,
+        window: Window,
+    ) -> SweepStats;
+    /// Element-wise sum, min or max over the ranks, in place.
+    fn sum(&mut self, x: &mut [f64]);
+    fn min(&mut self, x: &mut [f64]);
+    fn max(&mut self, x: &mut [f64]);
+    /// Particles inserted on this rank since the last step (a binary's L1 stream) go to the
+    /// ranks that own their places, by the same path as migration.
+    fn adopt(&mut self, p: &mut Particles<D>);
+    /// Every particle, on rank 0 (in id order); None on the other ranks.
+    fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>>;
+    /// After a step: move particles to their new owners, rebalance the load.
+    fn between_steps(&mut self, p: &mut Particles<D>, step: u64, log: &mut RunLog) -> Result<()>;
+    /// Figures of the distribution for `summary.json` (collective; None on one process).
+    fn record(&mut self) -> Option<serde_json::Value>;
+}
+
+/// One process, with threads.
+pub struct Solo;
+
+impl<const D: usize> Team<D> for Solo {
+    fn is_root(&self) -> bool {
+        true
+    }
+    fn ranks(&self) -> usize {
+        1
+    }
+    fn distribute(&mut self, _: &mut Particles<D>, _: &SimBox<D>) {}
+    fn evaluate(
+        &mut self,
+        p: &mut Particles<D>,
+        bx: &SimBox<D>,
+        phys: &Physics<D>,
+        window: Window,
+    ) -> SweepStats {
+        rhs(p, bx, phys, window)
+    }
+    fn sum(&mut self, _: &mut [f64]) {}
+    fn min(&mut self, _: &mut [f64]) {}
+    fn max(&mut self, _: &mut [f64]) {}
+    fn adopt(&mut self, _: &mut Particles<D>) {}
+    fn gather(&mut self, p: &Particles<D>) -> Option<Particles<D>> {
+        Some(p.clone())
+    }
+    fn between_steps(&mut self, _: &mut Particles<D>, _: u64, _: &mut RunLog) -> Result<()> {
+        Ok(())
+    }
+    fn record(&mut self) -> Option<serde_json::Value> {
+        None
+    }
+}
 
 /// A distributed run's ranks.
 pub struct Distributed<'c> {
@@ -311,30 +378,4 @@ impl<const D: usize> Team<D> for Distributed<'_> {
             "per_rank": per_rank,
         }))
     }
-}
-
-/// Runs the problem on the ranks of `comm` (each rank calls this; rank 0 writes).
-pub fn run(comm: &mut dyn Comm, cfg: &Config, opts: &RunOptions) -> Result<Ended> {
-    let mut team = Distributed::new(comm);
-    Ok(match cfg.dimension() {
-        1 => simulation::run_in_team::<1>(cfg, opts, &mut team)?.ended,
-        2 => simulation::run_in_team::<2>(cfg, opts, &mut team)?.ended,
-        3 => simulation::run_in_team::<3>(cfg, opts, &mut team)?.ended,
-        d => bail!("key `problem.dimension`: must be 1, 2 or 3, got {d}"),
-    })
-}
-
-/// Continues the run in `opts.out` from its newest checkpoint on the ranks of `comm`
-/// (any number of ranks: the checkpoint holds every particle).
-pub fn resume(comm: &mut dyn Comm, overrides: &[String], opts: &RunOptions) -> Result<Ended> {
-    // Rank 0 takes the folder's lock; the others, in other processes, must not see it.
-    if comm.rank() == 0 {
-        crate::io::run_folder::refuse_if_held(&opts.out)?;
-    }
-    let mut team = Distributed::new(comm);
-    Ok(match simulation::resume_dimension(overrides, opts)? {
-        1 => simulation::resume_in_team::<1>(overrides, opts, &mut team)?.ended,
-        2 => simulation::resume_in_team::<2>(overrides, opts, &mut team)?.ended,
-        _ => simulation::resume_in_team::<3>(overrides, opts, &mut team)?.ended,
-    })
 }

@@ -582,6 +582,64 @@ fn first_file(path: &Path) -> Result<PathBuf> {
     Ok(p0)
 }
 
+/// The first file of a snapshot (the file itself, or part 0 of a multi-file one), opened.
+fn open_first(path: &Path) -> Result<(File, PathBuf)> {
+    let first = first_file(path)?;
+    let bytes = std::fs::read(&first)
+        .with_context(|| format!("cannot read snapshot {}", first.display()))?;
+    let file = File::from_bytes(bytes)
+        .map_err(|e| anyhow::anyhow!("{} is not a readable HDF5 file: {e}", first.display()))?;
+    Ok((file, first))
+}
+
+/// The physical units of a snapshot: its `/Units` (cgs factors of the code units) with μ
+/// from its parameters (`units:mean_molecular_weight`, default 0.6); `None` when the file
+/// has no `/Units` or every factor is 1 (a run in G = 1 code units).
+pub fn read_units(path: &Path) -> Result<Option<Units>> {
+    let (file, first) = open_first(path)?;
+    let Ok(group) = file.group("Units") else {
+        return Ok(None);
+    };
+    let attrs = group
+        .attrs()
+        .map_err(|e| anyhow::anyhow!("{}: cannot read /Units: {e}", first.display()))?;
+    let get = |k: &str| attr_f64(&attrs, k).filter(|x| *x > 0.0 && x.is_finite());
+    let (Some(mass_cgs), Some(length_cgs), Some(time_cgs)) = (
+        get("Unit mass in cgs (U_M)"),
+        get("Unit length in cgs (U_L)"),
+        get("Unit time in cgs (U_t)"),
+    ) else {
+        return Ok(None);
+    };
+    if [mass_cgs, length_cgs, time_cgs] == [1.0; 3] {
+        return Ok(None);
+    }
+    let mu = read_parameters(path)?
+        .get("units:mean_molecular_weight")
+        .and_then(|v| v.parse::<f64>().ok())
+        .filter(|x| *x > 0.0);
+    Ok(Some(Units {
+        mass_cgs,
+        length_cgs,
+        time_cgs,
+        mean_molecular_weight: mu.unwrap_or_else(default_mu),
+    }))
+}
+
+/// Whether the snapshot's box is periodic along every axis (SWIFT's
+/// `RuntimePars/PeriodicBoundariesOn`; false when absent).
+pub fn read_periodic(path: &Path) -> Result<bool> {
+    let (file, _) = open_first(path)?;
+    let Ok(group) = file.group("RuntimePars") else {
+        return Ok(false);
+    };
+    Ok(group
+        .attrs()
+        .ok()
+        .and_then(|a| attr_f64(&a, "PeriodicBoundariesOn"))
+        .is_some_and(|x| x != 0.0))
+}
+
 /// The problem file a snapshot was written with: the attributes of its `/Parameters` group,
 /// keyed as stored — `section:key` (SWIFT's convention; sphdisk writes the dotted keys of
 /// `Config::flattened` with the first `.` made a `:`, so `[binary] q` is `binary:q`) — with
@@ -589,11 +647,8 @@ fn first_file(path: &Path) -> Result<PathBuf> {
 /// initial conditions) gives an empty map. Multi-file snapshots: as [`read_snapshot`], the
 /// parameters of the first part.
 pub fn read_parameters(path: &Path) -> Result<BTreeMap<String, String>> {
-    let first = first_file(path)?;
+    let (file, first) = open_first(path)?;
     let what = first.display();
-    let bytes = std::fs::read(&first).with_context(|| format!("cannot read snapshot {what}"))?;
-    let file = File::from_bytes(bytes)
-        .map_err(|e| anyhow::anyhow!("{what} is not a readable HDF5 file: {e}"))?;
     let Ok(group) = file.group("Parameters") else {
         return Ok(BTreeMap::new());
     };

@@ -8,5 +8,6 @@ pub mod hdf5;
 pub mod log;
 pub mod run_folder;
 pub mod snapshot;
+pub mod snapshot_index;
 pub mod summary;
 pub mod timeseries;

@@ -1,5 +1,5 @@
 //! Particle images as PNG: a snapshot's interpolated field drawn pixel for pixel inside a chart
-//! with axes in code units, a colour bar labelled with the quantity (and log10 on a log
+//! with axes in code units (cm with a run's physical units), a colour bar labelled with the quantity (and log10 on a log
 //! scale), point masses marked, the Roche lobes of a binary run drawn over it (`overlay`),
 //! and a title with the time; plus the colour ranges that movie frames share.
 
@@ -10,9 +10,12 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use crate::io::hdf5::Units;
 use crate::io::snapshot::Snapshot;
 use crate::render::colormap::{ColorRange, Colormap, Scale};
-use crate::render::interpolate::{Extent, Frame, Quantity, View, interpolate};
+use crate::render::interpolate::{
+    Extent, Frame, Quantity, View, interpolate, with_periodic_images,
+};
 use crate::render::overlay::{PixelMap, draw_roche};
 use crate::render::plot::ensure_font;
 
@@ -39,6 +42,13 @@ pub struct RenderOptions {
     /// `analysis::roche`) are drawn over the image; `None`: no lobes. `sphdisk render` takes
     /// it from the snapshot's parameters ([`crate::render::overlay::mass_ratio_of`]).
     pub roche_q: Option<f64>,
+    /// The run's physical units (`[units]`, or a binary's masses and period): axes and
+    /// colour bar in cgs (K for the temperature); `None`: code units.
+    /// `sphdisk render` reads them from the snapshot ([`crate::io::hdf5::read_units`]).
+    pub units: Option<Units>,
+    /// The box is periodic: particles near its faces are also drawn at their periodic
+    /// images ([`with_periodic_images`]).
+    pub periodic: bool,
 }
 
 impl RenderOptions {
@@ -55,6 +65,8 @@ impl RenderOptions {
             slice_z: None,
             title: None,
             roche_q: None,
+            units: None,
+            periodic: false,
         }
     }
 }
@@ -68,11 +80,22 @@ pub struct RenderedImage {
     pub range_used: (f64, f64),
 }
 
+/// The extent shown when `opts` gives none: the particles' ([`Extent::default_for`]); for
+/// a binary whose Roche lobes are drawn, the box (a cv run's box is sized to the binary),
+/// so that the lobes are in the picture.
+pub fn default_extent(snap: &Snapshot, opts: &RenderOptions) -> Result<Extent> {
+    if opts.roche_q.is_some() {
+        Extent::of_box(snap, opts.view)
+    } else {
+        Extent::default_for(snap, opts.view)
+    }
+}
+
 /// The grid of `opts` for `snap`: the chosen or default extent at the requested resolution.
 pub fn frame_for(snap: &Snapshot, opts: &RenderOptions) -> Result<Frame> {
     let extent = match opts.frame {
         Some(e) => Extent::new(e.x, e.y)?,
-        None => Extent::default_for(snap, opts.view)?,
+        None => default_extent(snap, opts)?,
     };
     let frame = Frame::fit(
         extent,
@@ -85,7 +108,12 @@ pub fn frame_for(snap: &Snapshot, opts: &RenderOptions) -> Result<Frame> {
 /// Interpolates the field of `opts` without drawing it (movies: fields first, one range).
 pub fn render_field(snap: &Snapshot, opts: &RenderOptions) -> Result<(Vec<f64>, Frame)> {
     let frame = frame_for(snap, opts)?;
-    let field = interpolate(snap, opts.quantity, opts.view, &frame, opts.slice_z)?;
+    let field = if opts.periodic {
+        let imaged = with_periodic_images(snap, opts.view);
+        interpolate(&imaged, opts.quantity, opts.view, &frame, opts.slice_z)?
+    } else {
+        interpolate(snap, opts.quantity, opts.view, &frame, opts.slice_z)?
+    };
     Ok((field, frame))
 }
 
@@ -107,9 +135,11 @@ pub fn render_png(snap: &Snapshot, opts: &RenderOptions, path: &Path) -> Result<
     })
 }
 
-/// A colour range covering all `fields`: linear, min .. max of the finite values; log,
-/// max / 10⁴ .. max of the positive values (zeros and negatives ignored). Degenerate ranges
-/// are widened so that they can be drawn.
+/// A colour range covering all `fields`: linear, min .. max of the finite values; log, from
+/// the 1% quantile of the positive values (zeros and negatives ignored) to their maximum,
+/// at most [`LOG_DECADES`] decades — so that a field within a factor of a few (a blast's
+/// shell over its background in column density) spans the colours instead of filling their
+/// top tenth. Degenerate ranges are widened so that they can be drawn.
 pub fn common_range(fields: &[&[f64]], scale: Scale) -> (f64, f64) {
     let values = || fields.iter().flat_map(|f| f.iter().copied());
     match scale {
@@ -129,17 +159,25 @@ pub fn common_range(fields: &[&[f64]], scale: Scale) -> (f64, f64) {
             }
         }
         Scale::Log => {
-            let hi = values()
-                .filter(|v| v.is_finite() && *v > 0.0)
-                .fold(0.0, f64::max);
-            if hi > 0.0 {
-                (hi * 1e-4, hi)
+            let mut positive: Vec<f64> = values().filter(|v| v.is_finite() && *v > 0.0).collect();
+            if positive.is_empty() {
+                return (10f64.powi(-LOG_DECADES), 1.0);
+            }
+            positive.sort_by(f64::total_cmp);
+            let hi = positive[positive.len() - 1];
+            let low_quantile = positive[(positive.len() - 1) / 100];
+            let lo = low_quantile.max(hi * 10f64.powi(-LOG_DECADES));
+            if lo < hi {
+                (lo, hi)
             } else {
-                (1e-4, 1.0)
+                (hi / 10.0, hi * 10.0)
             }
         }
     }
 }
+
+/// The most decades an automatic log colour range spans.
+pub const LOG_DECADES: i32 = 4;
 
 /// Layout of the picture, in screen pixels.
 const TITLE_H: u32 = 40;
@@ -214,7 +252,16 @@ fn default_title(snap: &Snapshot, opts: &RenderOptions) -> String {
         (_, v) if q == Quantity::ColumnDensity => format!("{v}"),
         (_, v) => format!("{v}, column-weighted along {}", los_axis(v)),
     };
-    format!("{}, {where_}", q.label())
+    format!("{}, {where_}", quantity_label(opts))
+}
+
+/// The quantity's name in the title and on the colour bar: with physical units the
+/// temperature is T in K, not P/ρ.
+fn quantity_label(opts: &RenderOptions) -> &'static str {
+    match (opts.quantity, &opts.units) {
+        (Quantity::Temperature, Some(_)) => "T (temperature)",
+        (q, _) => q.label(),
+    }
 }
 
 fn los_axis(view: View) -> &'static str {
@@ -357,15 +404,23 @@ fn draw_on<DB: DrawingBackend>(
     let bitmap = BitMapElement::with_owned_buffer((px.start, py.start), (w as u32, h as u32), buf)
         .ok_or_else(|| anyhow!("image buffer does not match the plot area"))?;
     root.draw(&bitmap).map_err(|e| err(&e))?;
-    let x_ticks = ticks_for(frame.x.1 - frame.x.0);
-    let y_ticks = ticks_for(frame.y.1 - frame.y.0);
+    // Lengths in cm with physical units: the ticks stay at the code values' places and
+    // say what they are in cgs.
+    let (length, length_unit) = match &opts.units {
+        Some(u) => (u.length_cgs, "cm"),
+        None => (1.0, "code units"),
+    };
+    let x_ticks = ticks_for(length * (frame.x.1 - frame.x.0));
+    let y_ticks = ticks_for(length * (frame.y.1 - frame.y.0));
+    let x_label = |v: &f64| x_ticks(&(v * length));
+    let y_label = |v: &f64| y_ticks(&(v * length));
     chart
         .configure_mesh()
         .disable_mesh()
-        .x_desc(format!("{xa} (code units)"))
-        .y_desc(format!("{ya} (code units)"))
-        .x_label_formatter(&x_ticks)
-        .y_label_formatter(&y_ticks)
+        .x_desc(format!("{xa} ({length_unit})"))
+        .y_desc(format!("{ya} ({length_unit})"))
+        .x_label_formatter(&x_label)
+        .y_label_formatter(&y_label)
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
         .draw()
@@ -426,16 +481,23 @@ fn draw_on<DB: DrawingBackend>(
     } else {
         ""
     };
-    let bar_ticks = ticks_for(a_hi - a_lo);
+    // With physical units the bar's values are cgs: × the factor, or + its log10.
+    let (factor, unit) = match &opts.units {
+        Some(u) => opts.quantity.cgs(snap.dimension, u),
+        None => (1.0, opts.quantity.unit(snap.dimension).to_string()),
+    };
+    let to_cgs = |v: f64| match range.scale {
+        Scale::Log => v + factor.log10(),
+        Scale::Linear => v * factor,
+    };
+    let label = quantity_label(opts);
+    let bar_ticks = ticks_for(to_cgs(a_hi) - to_cgs(a_lo));
+    let bar_label = |v: &f64| bar_ticks(&to_cgs(*v));
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
-        .y_desc(format!(
-            "{log}{} [{}]",
-            opts.quantity.label(),
-            opts.quantity.unit(snap.dimension)
-        ))
-        .y_label_formatter(&bar_ticks)
+        .y_desc(format!("{log}{} [{unit}]", label))
+        .y_label_formatter(&bar_label)
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
         .draw()
@@ -704,7 +766,17 @@ mod tests {
         let a = [0.0, 2.0, -1.0];
         let b = [5.0, f64::NAN, 0.5];
         assert_eq!(common_range(&[&a, &b], Scale::Linear), (-1.0, 5.0));
-        assert_eq!(common_range(&[&a, &b], Scale::Log), (5e-4, 5.0));
+        // Log: from the 1% quantile of the positive values, at most four decades.
+        assert_eq!(common_range(&[&a, &b], Scale::Log), (0.5, 5.0));
+        let wide: Vec<f64> = (0..1000)
+            .map(|k| 10f64.powf(-8.0 + 8.0 * k as f64 / 999.0))
+            .collect();
+        assert_eq!(common_range(&[&wide], Scale::Log), (1e-4, 1.0));
+        // A blast's shell over its background: the range spans the data, not 10⁴.
+        let shell: Vec<f64> = (0..1000)
+            .map(|k| 1.0 + 2.0 * (k % 7) as f64 / 6.0)
+            .collect();
+        assert_eq!(common_range(&[&shell], Scale::Log), (1.0, 3.0));
         assert_eq!(common_range(&[&[0.0, -2.0]], Scale::Log), (1e-4, 1.0));
         assert_eq!(common_range(&[&[3.0, 3.0]], Scale::Linear), (1.5, 4.5));
         assert_eq!(common_range(&[], Scale::Linear), (0.0, 1.0));
@@ -719,5 +791,51 @@ mod tests {
         assert_eq!(tick(&2.0e6), "2e6");
         assert_eq!(ticks_for(0.6)(&-2.78e-17), "0");
         assert_eq!(ticks_for(0.6)(&0.1), "0.1");
+    }
+
+    #[test]
+    fn physical_units_are_read_for_axes_and_colour_bar() {
+        use crate::io::hdf5::{RunMetadata, read_periodic, read_units, write_snapshot};
+        let dir = tempfile::tempdir().unwrap();
+        let snap = cloud(3);
+        let units = Units {
+            mass_cgs: 2e33,
+            length_cgs: 1.5e13,
+            time_cgs: 3.15e7,
+            mean_molecular_weight: 2.3,
+        };
+        let meta = RunMetadata {
+            parameters: [("units.mean_molecular_weight".to_string(), "2.3".to_string())].into(),
+            units,
+            periodic: true,
+            physical: true,
+        };
+        let path = dir.path().join("physical.hdf5");
+        write_snapshot(&path, &snap, &meta, 1).unwrap();
+        assert_eq!(read_units(&path).unwrap(), Some(units));
+        assert!(read_periodic(&path).unwrap());
+        // G = 1 code units: none, and the pictures say "code units".
+        let plain = dir.path().join("plain.hdf5");
+        write_snapshot(&plain, &snap, &RunMetadata::default(), 1).unwrap();
+        assert_eq!(read_units(&plain).unwrap(), None);
+        assert!(!read_periodic(&plain).unwrap());
+        let (k, name) = Quantity::Temperature.cgs(3, &units);
+        assert_eq!(
+            (k, name.as_str()),
+            (units.kelvin_per_specific_energy(), "K")
+        );
+        let (k, name) = Quantity::ColumnDensity.cgs(3, &units);
+        assert_eq!((k, name.as_str()), (2e33 / (1.5e13 * 1.5e13), "g cm⁻²"));
+        // Drawn: a picture with units differs from one without (labels in cm and K).
+        let mut opts = RenderOptions::new(Quantity::Temperature, View::FaceOn);
+        opts.resolution = (40, 40);
+        let a = render_png(&snap, &opts, &dir.path().join("a.png")).unwrap();
+        opts.units = Some(units);
+        let b = render_png(&snap, &opts, &dir.path().join("b.png")).unwrap();
+        assert_eq!(a.field, b.field);
+        assert_ne!(
+            std::fs::read(dir.path().join("a.png")).unwrap(),
+            std::fs::read(dir.path().join("b.png")).unwrap()
+        );
     }
 }

@@ -77,6 +77,21 @@ impl Quantity {
         }
     }
 
+    /// The factor to cgs of the quantity in code units `u`, and the cgs unit's name:
+    /// the temperature P/ρ in K (T = μ m_p P/(ρ k_B)), the rest in g, cm, s.
+    pub fn cgs(&self, dimension: usize, u: &crate::io::hdf5::Units) -> (f64, String) {
+        let (m, l, t) = (u.mass_cgs, u.length_cgs, u.time_cgs);
+        let (factor, name) = match self {
+            Quantity::ColumnDensity => (m / (l * l), "g cm⁻²"),
+            Quantity::Density if dimension == 2 => (m / (l * l), "g cm⁻²"),
+            Quantity::Density => (m / (l * l * l), "g cm⁻³"),
+            Quantity::Dissipation => (l * l / (t * t * t), "erg g⁻¹ s⁻¹"),
+            Quantity::Temperature => (u.kelvin_per_specific_energy(), "K"),
+            Quantity::Velocity => (l / t, "cm s⁻¹"),
+        };
+        (factor, name.to_string())
+    }
+
     /// Densities span decades: log scale; the rest linear.
     pub fn default_scale(self) -> Scale {
         match self {
@@ -208,17 +223,12 @@ impl Extent {
         self.y.1 - self.y.0
     }
 
-    /// The default extent of `view`: the box along the view's axes, or where the box is not
-    /// usable there, the particles' bounds widened by one kernel support.
+    /// The default extent of `view`: the particles' bounds along the view's axes widened
+    /// by one kernel support, within the box (a disk that fills a fifth of its box fills
+    /// the picture; particles that fill a periodic box give the box). Where the box is not
+    /// usable, the widened bounds alone.
     pub fn default_for(snap: &Snapshot, view: View) -> Result<Self> {
         let (a, b) = view.axis_indices();
-        let from_box = Self {
-            x: (snap.box_lo[a], snap.box_hi[a]),
-            y: (snap.box_lo[b], snap.box_hi[b]),
-        };
-        if from_box.check().is_ok() {
-            return Ok(from_box);
-        }
         let pad = KERNEL_SUPPORT * snap.h.iter().copied().fold(0.0, f64::max);
         let bounds = |d: usize| {
             let (lo, hi) = snap.pos[d]
@@ -228,9 +238,103 @@ impl Extent {
                 });
             (lo - pad, hi + pad)
         };
-        Self::new(bounds(a), bounds(b))
+        let fitted = Self {
+            x: bounds(a),
+            y: bounds(b),
+        };
+        let from_box = Self {
+            x: (snap.box_lo[a], snap.box_hi[a]),
+            y: (snap.box_lo[b], snap.box_hi[b]),
+        };
+        if from_box.check().is_ok() {
+            let within = Self {
+                x: (fitted.x.0.max(from_box.x.0), fitted.x.1.min(from_box.x.1)),
+                y: (fitted.y.0.max(from_box.y.0), fitted.y.1.min(from_box.y.1)),
+            };
+            return Ok(if within.check().is_ok() {
+                within
+            } else {
+                from_box
+            });
+        }
+        Self::new(fitted.x, fitted.y)
             .context("neither the snapshot's box nor its particles give an image extent")
     }
+
+    /// The box along the view's axes, or where it is not usable, [`Self::default_for`].
+    pub fn of_box(snap: &Snapshot, view: View) -> Result<Self> {
+        let (a, b) = view.axis_indices();
+        let from_box = Self {
+            x: (snap.box_lo[a], snap.box_hi[a]),
+            y: (snap.box_lo[b], snap.box_hi[b]),
+        };
+        if from_box.check().is_ok() {
+            Ok(from_box)
+        } else {
+            Self::default_for(snap, view)
+        }
+    }
+
+    /// The smallest extent holding both.
+    pub fn union(&self, other: &Self) -> Self {
+        Self {
+            x: (self.x.0.min(other.x.0), self.x.1.max(other.x.1)),
+            y: (self.y.0.min(other.y.0), self.y.1.max(other.y.1)),
+        }
+    }
+}
+
+/// `snap` with the periodic images of its particles that lie within one kernel support of
+/// the box's faces across the view's two axes (and the corners), so that a periodic box's
+/// picture has no dark bands at its borders: a particle near x = lo reappears at x + L,
+/// where its kernel reaches into the picture from the other side.
+pub fn with_periodic_images(snap: &Snapshot, view: View) -> Snapshot {
+    let (a, b) = view.axis_indices();
+    let mut out = snap.clone();
+    let shifts = |d: usize, x: f64, reach: f64| -> Vec<f64> {
+        let (lo, hi) = (snap.box_lo[d], snap.box_hi[d]);
+        let len = hi - lo;
+        let mut s = vec![0.0];
+        if !(len > 0.0) || d >= snap.dimension {
+            return s;
+        }
+        if x - lo < reach {
+            s.push(len);
+        }
+        if hi - x < reach {
+            s.push(-len);
+        }
+        s
+    };
+    for i in 0..snap.len() {
+        let reach = KERNEL_SUPPORT * snap.h[i];
+        for &sa in &shifts(a, snap.pos[a][i], reach) {
+            for &sb in &shifts(b, snap.pos[b][i], reach) {
+                if sa == 0.0 && sb == 0.0 {
+                    continue;
+                }
+                for d in 0..3 {
+                    let shift = if d == a {
+                        sa
+                    } else if d == b {
+                        sb
+                    } else {
+                        0.0
+                    };
+                    out.pos[d].push(snap.pos[d][i] + shift);
+                    out.vel[d].push(snap.vel[d][i]);
+                }
+                out.id.push(snap.id[i]);
+                out.mass.push(snap.mass[i]);
+                out.h.push(snap.h[i]);
+                out.rho.push(snap.rho[i]);
+                out.u.push(snap.u[i]);
+                out.p.push(snap.p[i]);
+                out.diss.push(snap.diss[i]);
+            }
+        }
+    }
+    out
 }
 
 /// A pixel grid: `nx` × `ny` pixels covering `x` × `y`. Values are taken at pixel centres
@@ -1119,5 +1223,74 @@ mod tests {
         assert!((f.dx() - f.dy()).abs() < 1e-12);
         let f = Frame::fit(e, (100, 10));
         assert_eq!((f.nx, f.ny), (40, 10));
+    }
+
+    #[test]
+    fn default_frame_fits_the_particles_within_the_box() {
+        // A ring of radius 1 about the centre of a box 20 wide: the frame is the ring
+        // widened by one kernel support, not the box.
+        let mut snap = Snapshot {
+            dimension: 2,
+            box_lo: [-10.0, -10.0, 0.0],
+            box_hi: [10.0, 10.0, 1.0],
+            ..Snapshot::default()
+        };
+        for k in 0..100 {
+            let phi = std::f64::consts::TAU * k as f64 / 100.0;
+            snap.pos[0].push(phi.cos());
+            snap.pos[1].push(phi.sin());
+            snap.pos[2].push(0.0);
+            snap.h.push(0.1);
+        }
+        let e = Extent::default_for(&snap, View::FaceOn).unwrap();
+        let pad = KERNEL_SUPPORT * 0.1;
+        assert!(
+            (e.x.0 + 1.0 + pad).abs() < 1e-12 && (e.x.1 - 1.0 - pad).abs() < 1e-12,
+            "{e:?}"
+        );
+        assert!(
+            (e.y.0 + 1.0 + pad).abs() < 1e-3 && (e.y.1 - 1.0 - pad).abs() < 1e-3,
+            "{e:?}"
+        );
+        // Particles that fill the box (a periodic one) give the box.
+        snap.pos[0][0] = -9.99;
+        snap.pos[0][1] = 9.99;
+        snap.pos[1][0] = -9.99;
+        snap.pos[1][1] = 9.99;
+        let e = Extent::default_for(&snap, View::FaceOn).unwrap();
+        assert_eq!((e.x, e.y), ((-10.0, 10.0), (-10.0, 10.0)));
+        let u = Extent::new((0.0, 1.0), (0.0, 1.0))
+            .unwrap()
+            .union(&Extent::new((-1.0, 0.5), (0.5, 2.0)).unwrap());
+        assert_eq!((u.x, u.y), ((-1.0, 1.0), (0.0, 2.0)));
+    }
+
+    #[test]
+    fn periodic_images_fill_the_borders() {
+        // A uniform periodic lattice: without images its column density falls off within
+        // one support of the faces; with them it is uniform up to the faces.
+        let snap = lattice(12, 12, 4, 1.2);
+        let frame = Frame::new(Extent::new((0.0, 12.0), (0.0, 12.0)).unwrap(), 24, 24);
+        let plain = column_density(&snap, View::FaceOn, &frame).unwrap();
+        let imaged = with_periodic_images(&snap, View::FaceOn);
+        assert!(imaged.len() > snap.len());
+        // Images only within one support of a face, across x and y only.
+        for i in snap.len()..imaged.len() {
+            let x = imaged.pos[0][i];
+            let y = imaged.pos[1][i];
+            assert!(
+                !((0.0..12.0).contains(&x) && (0.0..12.0).contains(&y)),
+                "{x} {y}"
+            );
+        }
+        let full = column_density(&imaged, View::FaceOn, &frame).unwrap();
+        let spread = |f: &[f64]| {
+            let (lo, hi) = f
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
+            (hi - lo) / hi
+        };
+        assert!(spread(&plain) > 0.3, "{}", spread(&plain));
+        assert!(spread(&full) < 0.02, "{}", spread(&full));
     }
 }

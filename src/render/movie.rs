@@ -1,5 +1,6 @@
-//! `sphdisk render` on a run folder: every snapshot of the run (from `snapshots.json`) as a
-//! numbered PNG frame, all with one colour range so that the frames make a movie, and all
+//! `sphdisk render` on a run folder: every snapshot of the run (from `snapshots.json`, and
+//! the final state when it is later) as a numbered PNG frame, all with one frame and one
+//! colour range so that the frames make a movie, and all
 //! with the same overlay (`RenderOptions::roche_q`: a binary's Roche lobes).
 
 use std::path::{Path, PathBuf};
@@ -7,30 +8,45 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 
 use crate::io::hdf5::read_snapshot_with_h;
-use crate::render::image::{RenderOptions, common_range, draw_png, render_field};
-use crate::simulation::SnapshotIndex;
+use crate::io::snapshot_index::snapshots_with_final;
+use crate::render::image::{RenderOptions, common_range, default_extent, draw_png, render_field};
+use crate::render::interpolate::Extent;
 
-/// Renders every snapshot of the run in `run` into `out/frame_NNNN.png` with a colour range
-/// fixed over all of them (unless `opts.range` fixes it already) and the rest of `opts` —
-/// the Roche lobes of `opts.roche_q` included — for every frame; returns the frames written.
+/// Renders every snapshot of the run in `run` — those `snapshots.json` lists and the final
+/// state when it is later ([`snapshots_with_final`]) — into `out/frame_NNNN.png`, all with
+/// one frame (`opts.frame`, or the smallest holding every snapshot's [`default_extent`]) and one
+/// colour range (`opts.range`, or [`common_range`] over all of them), and the rest of
+/// `opts` — the Roche lobes of `opts.roche_q` included — for every frame; returns the
+/// frames written.
 pub fn render_run(run: &Path, opts: &RenderOptions, out: &Path) -> Result<Vec<PathBuf>> {
-    let index = SnapshotIndex::read(run)?;
-    if index.snapshots.is_empty() {
+    let files = snapshots_with_final(run)?;
+    if files.is_empty() {
         bail!(
             "{}: the run wrote no snapshots (set output.interval)",
             run.display()
         );
     }
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
-    // Fields first (one range for all), then pictures.
-    let mut fields = Vec::with_capacity(index.snapshots.len());
-    for entry in &index.snapshots {
-        let snap = read_snapshot_with_h(&run.join(&entry.file))?.in_run_frame();
-        let (field, frame) =
-            render_field(&snap, opts).with_context(|| format!("rendering {}", entry.file))?;
-        fields.push((snap, field, frame));
+    let mut snaps = Vec::with_capacity(files.len());
+    for (file, _) in &files {
+        snaps.push((file, read_snapshot_with_h(&run.join(file))?.in_run_frame()));
     }
     let mut fixed = opts.clone();
+    if fixed.frame.is_none() {
+        let mut frame: Option<Extent> = None;
+        for (file, snap) in &snaps {
+            let e = default_extent(snap, opts).with_context(|| format!("framing {file}"))?;
+            frame = Some(frame.map_or(e, |f| f.union(&e)));
+        }
+        fixed.frame = frame;
+    }
+    // Fields first (one range for all), then pictures.
+    let mut fields = Vec::with_capacity(snaps.len());
+    for (file, snap) in snaps {
+        let (field, frame) =
+            render_field(&snap, &fixed).with_context(|| format!("rendering {file}"))?;
+        fields.push((snap, field, frame));
+    }
     if fixed.range.is_none() {
         let all: Vec<&[f64]> = fields.iter().map(|(_, f, _)| f.as_slice()).collect();
         fixed.range = Some(common_range(&all, opts.scale));
@@ -49,9 +65,9 @@ mod tests {
     use super::*;
     use crate::io::hdf5::{RunMetadata, Units, write_snapshot};
     use crate::io::snapshot::Snapshot;
+    use crate::io::snapshot_index::{SnapshotEntry, SnapshotIndex};
     use crate::render::interpolate::{Quantity, View};
     use crate::render::overlay::mass_ratio_of;
-    use crate::simulation::SnapshotEntry;
 
     /// A run folder of a q = 0.2 binary with two snapshots of a small ring about the
     /// accretor, box (−1.5, −1) … (0.5, 1), as a 2D run writes them.
@@ -120,5 +136,30 @@ mod tests {
         for (a, b) in plain.iter().zip(&roche) {
             assert_ne!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
         }
+    }
+
+    #[test]
+    fn frames_include_the_final_state_when_it_is_later() {
+        let dir = tempfile::tempdir().unwrap();
+        binary_run(dir.path());
+        let mut opts = RenderOptions::new(Quantity::Density, View::FaceOn);
+        opts.resolution = (32, 32);
+        let two = render_run(dir.path(), &opts, &dir.path().join("two")).unwrap();
+        assert_eq!(two.len(), 2);
+        // A final state at t = 2, after the last snapshot (t = 1): one more frame.
+        let mut last = read_snapshot(&dir.path().join("snap_0001.hdf5")).unwrap();
+        last.time = 2.0;
+        let meta = RunMetadata::default();
+        write_snapshot(&dir.path().join("final.hdf5"), &last, &meta, 1).unwrap();
+        let files = snapshots_with_final(dir.path()).unwrap();
+        let times: Vec<f64> = files.iter().map(|f| f.1).collect();
+        assert_eq!(times, [0.0, 1.0, 2.0]);
+        assert_eq!(files[2].0, "final.hdf5");
+        let three = render_run(dir.path(), &opts, &dir.path().join("three")).unwrap();
+        assert_eq!(three.len(), 3);
+        // A final state at the last snapshot's time adds nothing.
+        last.time = 1.0;
+        write_snapshot(&dir.path().join("final.hdf5"), &last, &meta, 1).unwrap();
+        assert_eq!(snapshots_with_final(dir.path()).unwrap().len(), 2);
     }
 }

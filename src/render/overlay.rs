@@ -24,8 +24,8 @@ use plotters::prelude::*;
 
 use crate::analysis::roche::{self, Plane};
 use crate::io::hdf5::read_parameters;
+use crate::io::snapshot_index::snapshot_of;
 use crate::render::interpolate::{Frame, View};
-use crate::simulation::SnapshotIndex;
 
 /// The colour of the overlay lines (white: no colour map reaches it).
 pub const OVERLAY_RGB: [u8; 3] = [255, 255, 255];
@@ -61,14 +61,8 @@ pub fn mass_ratio(parameters: &BTreeMap<String, String>) -> Result<Option<f64>> 
 /// The mass ratio of the binary run behind `input` — a snapshot, or a run folder (its first
 /// snapshot in `snapshots.json`) — as [`mass_ratio`]; `None` when it is not a binary.
 pub fn mass_ratio_of(input: &Path) -> Result<Option<f64>> {
-    let snapshot = if input.is_dir() {
-        let index = SnapshotIndex::read(input)?;
-        let Some(first) = index.snapshots.first() else {
-            return Ok(None);
-        };
-        input.join(&first.file)
-    } else {
-        input.to_path_buf()
+    let Some(snapshot) = snapshot_of(input)? else {
+        return Ok(None);
     };
     mass_ratio(&read_parameters(&snapshot)?)
         .map_err(|e| anyhow!("{}: {e} (render with --no-roche)", snapshot.display()))

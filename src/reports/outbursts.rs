@@ -16,7 +16,7 @@
 //!   amplitude reached [`SUPER_ECCENTRICITY`], three times what the stream's lopsided
 //!   impact alone holds — is a superoutburst; its light curve from the time e reached half
 //!   its peak to the outburst's end is searched for the superhump (P_sh and ε, as
-//!   `analyse superhump` does: `analysis::lightcurve_report`, periods 0.8–1.5 P_orb).
+//!   `analyse superhump` does: `reports::lightcurve`, periods 0.8–1.5 P_orb).
 //! - **Recurrence.** The intervals between successive outbursts' starts, in orbits, and in
 //!   days: with the run's `binary.period_days`, or scaled to OY Car's P_orb = 0.0631209 d
 //!   (exact-solutions.md, section 4) for a run in code units.
@@ -31,9 +31,9 @@ use anyhow::{Context, Result, bail};
 use plotters::style::RGBColor;
 use serde::Serialize;
 
-use crate::analysis::lightcurve_report::{self, LightcurveFigures};
-use crate::analysis::superhump_report::{self, ModesRow, running_mean};
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
+use crate::reports::lightcurve::{self, LightcurveFigures};
+use crate::reports::superhump::{self, ModesRow, running_mean};
 
 /// Width of the running mean of the light curve, in orbits.
 pub const SMOOTH_ORBITS: f64 = 1.0;
@@ -52,8 +52,8 @@ pub const MERGE_ORBITS: f64 = 2.0;
 pub const MIN_ORBITS: f64 = 1.0;
 /// The m = 1 amplitude (one-orbit mean) that makes an outburst a superoutburst: three
 /// times the ~0.01 the stream's impact holds in a circular disk
-/// (`superhump_report::ECCENTRIC_MIN` is the same bar).
-pub const SUPER_ECCENTRICITY: f64 = superhump_report::ECCENTRIC_MIN;
+/// (`superhump::ECCENTRIC_MIN` is the same bar).
+pub const SUPER_ECCENTRICITY: f64 = superhump::ECCENTRIC_MIN;
 /// OY Car's orbital period (days), the scale for runs in code units.
 pub const OY_CAR_PERIOD_DAYS: f64 = 0.0631209;
 
@@ -136,7 +136,7 @@ fn mean(v: &[f64]) -> Option<f64> {
 }
 
 /// The brightness above quiescence (t in orbits, Δm) of the smoothed light curve, and L_q.
-pub fn brightness(light: &[lightcurve_report::Row]) -> Result<(Vec<f64>, Vec<f64>, f64)> {
+pub fn brightness(light: &[lightcurve::Row]) -> Result<(Vec<f64>, Vec<f64>, f64)> {
     let t: Vec<f64> = light.iter().map(|r| r.t / TAU).collect();
     let l: Vec<f64> = light.iter().map(|r| r.l_total).collect();
     let smooth = running_mean(&t, &l, 0.5 * SMOOTH_ORBITS);
@@ -194,7 +194,7 @@ pub fn bright_stretches(t: &[f64], dm: &[f64]) -> Vec<(f64, f64)> {
 /// The whole analysis from the three series (module doc); `days_per_orbit` with what it
 /// is.
 pub fn analyse(
-    light: &[lightcurve_report::Row],
+    light: &[lightcurve::Row],
     monitor: &[MonitorRow],
     modes: &[ModesRow],
     (days_per_orbit, days_from): (f64, String),
@@ -253,13 +253,12 @@ pub fn analyse(
                 .iter()
                 .find(|p| p.1 >= 0.5 * eccentricity_max)
                 .map_or(s, |p| p.0);
-            let rows: Vec<lightcurve_report::Row> = light
+            let rows: Vec<lightcurve::Row> = light
                 .iter()
                 .filter(|r| r.t / TAU >= from && r.t / TAU <= e)
                 .copied()
                 .collect();
-            match lightcurve_report::analyse_range(&rows, 0.0, true, superhump_report::PERIOD_RANGE)
-            {
+            match lightcurve::analyse_range(&rows, 0.0, true, superhump::PERIOD_RANGE) {
                 Ok(LightcurveFigures {
                     period_orbits,
                     period_excess,
@@ -353,15 +352,14 @@ fn read(run: &Path, name: &str, what: &str) -> Result<String> {
 /// Reads a run's series and `run.toml`, analyses them, writes `outbursts.json`,
 /// `outbursts.png` and the `outbursts` key of `summary.json`.
 pub fn analyse_outbursts(run: &Path) -> Result<OutburstReport> {
-    let light =
-        lightcurve_report::parse_lightcurve(&read(run, "lightcurve.csv", "the light curve")?)
-            .with_context(|| run.join("lightcurve.csv").display().to_string())?;
-    let (light, _) = lightcurve_report::supersede(&light);
+    let light = lightcurve::parse_lightcurve(&read(run, "lightcurve.csv", "the light curve")?)
+        .with_context(|| run.join("lightcurve.csv").display().to_string())?;
+    let (light, _) = lightcurve::supersede(&light);
     let monitor = parse_monitor(&read(run, "monitor.csv", "the disk's monitor")?)
         .with_context(|| run.join("monitor.csv").display().to_string())?;
-    let modes = superhump_report::parse_modes(&read(run, "modes.csv", "the disk's modes")?)
+    let modes = superhump::parse_modes(&read(run, "modes.csv", "the disk's modes")?)
         .with_context(|| run.join("modes.csv").display().to_string())?;
-    let (_, days, note) = lightcurve_report::binary_of(run);
+    let (_, days, note) = lightcurve::binary_of(run);
     let scale = match days {
         Some(d) => (d, "binary.period_days of run.toml".to_string()),
         None => (
@@ -414,7 +412,7 @@ impl OutburstReport {
                 match (o.superhump_period_orbits, o.epsilon, o.epsilon_err) {
                     (Some(p), Some(e), Some(err)) => format!(
                         "; superhump P_sh = {p:.4} P_orb, ε = {}",
-                        lightcurve_report::plus_minus(e, err)
+                        lightcurve::plus_minus(e, err)
                     ),
                     _ => String::new(),
                 }
@@ -438,7 +436,7 @@ const GREY: RGBColor = RGBColor(140, 140, 140);
 const RED: RGBColor = RGBColor(200, 30, 30);
 
 fn panels(
-    light: &[lightcurve_report::Row],
+    light: &[lightcurve::Row],
     monitor: &[MonitorRow],
     modes: &[ModesRow],
     f: &OutburstFigures,
@@ -554,7 +552,7 @@ mod tests {
         bursts: &[(f64, f64, f64, f64, f64, bool)],
         p_sh: f64,
         sh: f64,
-    ) -> (Vec<lightcurve_report::Row>, Vec<MonitorRow>, Vec<ModesRow>) {
+    ) -> (Vec<lightcurve::Row>, Vec<MonitorRow>, Vec<ModesRow>) {
         let n = (orbits * 50.0) as usize;
         let mut light = Vec::new();
         let mut monitor = Vec::new();
@@ -585,7 +583,7 @@ mod tests {
                 }
             }
             let t = o * TAU;
-            light.push(lightcurve_report::Row {
+            light.push(lightcurve::Row {
                 t,
                 orbit: o,
                 l_total: l,

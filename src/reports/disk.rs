@@ -10,12 +10,12 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 
-use crate::analysis::run_config;
 use crate::config::{Config, ProblemKind};
 use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot_with_h;
+use crate::io::snapshot_index::SnapshotIndex;
 use crate::problems::disk::{errors_from_start, setup};
-use crate::simulation::SnapshotIndex;
+use crate::reports::run_config;
 
 /// What the analysis wrote, and the figures at each snapshot's time.
 pub struct DiskReport {

@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 
-use crate::analysis::run_config;
 use crate::config::ProblemKind;
 use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot_with_h;
 use crate::problems::sod::{params, solution};
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
+use crate::reports::run_config;
 
 /// Reads `run.toml` and `final.hdf5` of a shock-tube run and writes the plot and the CSV.
 pub fn analyse_sod(run: &Path) -> Result<Vec<PathBuf>> {

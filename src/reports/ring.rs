@@ -10,10 +10,10 @@ use anyhow::{Context, Result};
 use crate::analysis::annulus_stats;
 use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot_with_h;
+use crate::io::snapshot_index::SnapshotIndex;
 use crate::io::summary::Summary;
 use crate::problems::ring::{exact, ring_l1, tau_at};
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
-use crate::simulation::SnapshotIndex;
 
 /// What the analysis wrote, and the L1 error at each τ.
 pub struct RingReport {

@@ -3,7 +3,7 @@
 //! writes, `modes.csv` (the disk's m = 1 and m = 2 modes) and `lightcurve.csv`.
 //!
 //! - **Eccentricity.** e(t) is the m = 1 amplitude of the disk mass in the window
-//!   [0.5, 1.0) R90 (`analysis::cv_report::ECCENTRICITY_WINDOW`: for a ring on a Kepler
+//!   [0.5, 1.0) R90 (`problems::cv::ECCENTRICITY_WINDOW`: for a ring on a Kepler
 //!   ellipse it is the ellipse's e), smoothed over one orbit ([`SMOOTH_ORBITS`]). Its peak
 //!   is its largest value after the first [`START_ORBITS`]; the onset the first time it
 //!   reaches half the peak; its floor the least value before the onset. The disk counts as
@@ -30,7 +30,7 @@
 //!   it.
 //! - **Light curve.** The dissipation light curve of the same active stretch, its
 //!   periodogram searched between [`PERIOD_RANGE`] P_orb with a floating cubic trend
-//!   (`analysis::lightcurve_report`): the superhump period P_sh with its error,
+//!   (`reports::lightcurve`): the superhump period P_sh with its error,
 //!   ε = (P_sh − P_orb)/P_orb, the modulation's semi-amplitude relative to the trend and its
 //!   peak-to-peak amplitude in magnitudes.
 //! - **Beside them:** the dynamical ε of the precession at r_3:1 and at the disk's radius
@@ -51,10 +51,10 @@ use anyhow::{Context, Result, bail};
 use plotters::style::RGBColor;
 use serde::Serialize;
 
-use crate::analysis::lightcurve_report::{self, LightcurveFigures};
 use crate::analysis::roche;
 use crate::io::atomic::write_atomic;
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
+use crate::reports::lightcurve::{self, LightcurveFigures};
 
 /// Header of `modes.csv`.
 pub const HEADER: &str = crate::io::timeseries::MODES_HEADER;
@@ -404,7 +404,7 @@ pub fn precession(rows: &[ModesRow], from: f64, to: f64) -> Option<Precession> {
 /// The whole analysis from the two series' rows and the run's q (module doc).
 pub fn analyse(
     modes: &[ModesRow],
-    light: &[lightcurve_report::Row],
+    light: &[lightcurve::Row],
     q: Option<f64>,
 ) -> Result<SuperhumpFigures> {
     let rows: Vec<&ModesRow> = modes.iter().filter(|r| r.m1.is_finite()).collect();
@@ -436,12 +436,11 @@ pub fn analyse(
     } else {
         None
     };
-    let light: Vec<lightcurve_report::Row> =
-        light.iter().filter(|r| r.t / TAU <= to).copied().collect();
+    let light: Vec<lightcurve::Row> = light.iter().filter(|r| r.t / TAU <= to).copied().collect();
     let lc = match light.first() {
         Some(first) => {
             let skip = (from - first.t / TAU).max(0.0);
-            match lightcurve_report::analyse_range(&light, skip, true, PERIOD_RANGE) {
+            match lightcurve::analyse_range(&light, skip, true, PERIOD_RANGE) {
                 Ok(f) => Some(f),
                 Err(e) => {
                     notes.push(format!("light curve: {e:#}"));
@@ -513,9 +512,9 @@ pub fn analyse_superhump(run: &Path) -> Result<SuperhumpReport> {
     })?;
     let modes = parse_modes(&text).with_context(|| path.display().to_string())?;
     let lc_path = run.join("lightcurve.csv");
-    let light = lightcurve_report::read_lightcurve(&lc_path)?;
-    let (light, _) = lightcurve_report::supersede(&light);
-    let (q, _, note) = lightcurve_report::binary_of(run);
+    let light = lightcurve::read_lightcurve(&lc_path)?;
+    let (light, _) = lightcurve::supersede(&light);
+    let (q, _, note) = lightcurve::binary_of(run);
     let mut f = analyse(&modes, &light, q).with_context(|| run.display().to_string())?;
     f.notes.extend(note);
 
@@ -530,18 +529,10 @@ pub fn analyse_superhump(run: &Path) -> Result<SuperhumpReport> {
     }
     if let Some(l) = &f.lightcurve {
         let png = run.join("superhump_lightcurve.png");
-        plot_panels(
-            &png,
-            (1800, 600),
-            &lightcurve_report::lightcurve_panels(&light, l),
-        )?;
+        plot_panels(&png, (1800, 600), &lightcurve::lightcurve_panels(&light, l))?;
         files.push(png);
         let png = run.join("superhump_periodogram.png");
-        plot_panels(
-            &png,
-            (1100, 550),
-            &[lightcurve_report::periodogram_panel(l)],
-        )?;
+        plot_panels(&png, (1100, 550), &[lightcurve::periodogram_panel(l)])?;
         files.push(png);
     }
     files.push(crate::io::summary::write_analysis(
@@ -598,10 +589,10 @@ impl SuperhumpReport {
         if let Some(p) = &f.precession {
             s += &format!(
                 "  precession ω_p = {} Ω_orb (osculating {:.5}), {:.2} turns; beat ε = {}\n",
-                lightcurve_report::plus_minus(p.rate, p.rate_err),
+                lightcurve::plus_minus(p.rate, p.rate_err),
                 p.rate_osculating,
                 p.turns,
-                lightcurve_report::plus_minus(p.epsilon_beat, p.epsilon_beat_err)
+                lightcurve::plus_minus(p.epsilon_beat, p.epsilon_beat_err)
             );
         }
         if let (Some(e), Some(err), Some(ps)) =
@@ -609,7 +600,7 @@ impl SuperhumpReport {
         {
             s += &format!(
                 "  light curve: P_sh = {ps:.5} P_orb, ε = {}, amplitude {} mag\n",
-                lightcurve_report::plus_minus(e, err),
+                lightcurve::plus_minus(e, err),
                 f.amplitude_mag.map_or("?".into(), |m| format!("{m:.4}"))
             );
         }
@@ -739,7 +730,7 @@ fn precession_panel(p: &Precession) -> Panel {
     Panel {
         title: format!(
             "longitude of periastron (inertial): ω_p = {} Ω_orb",
-            lightcurve_report::plus_minus(p.rate, p.rate_err)
+            lightcurve::plus_minus(p.rate, p.rate_err)
         ),
         x_label: "orbit (t / P_orb)".into(),
         y_label: "ϖ (degrees, unwrapped)".into(),

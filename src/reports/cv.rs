@@ -48,34 +48,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
-use crate::analysis::{roche, run_config, weighted_quantile};
+use crate::analysis::{roche, weighted_quantile};
 use crate::config::ProblemKind;
 use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot_with_h;
 use crate::io::snapshot::Snapshot;
+use crate::io::snapshot_index::snapshots_with_final;
 use crate::physics::binary::{Binary, Region};
-use crate::simulation::SnapshotIndex;
-
-/// The radial window, in units of R90, over which the disk's eccentricity is measured.
-///
-/// Why the m = 1 amplitude, and why this window: a Kepler ellipse of eccentricity e
-/// travelled at its own pace (particles uniform in mean anomaly: a ring in steady motion)
-/// has ⟨e^{iφ}⟩ = ⟨cos f⟩ e^{iϖ} = −e e^{iϖ} (the time average of cos f over an orbit is −e),
-/// so the mass-weighted amplitude |Σ m e^{iφ}| / Σ m of a ring is its eccentricity and its
-/// phase points to apoastron, where the gas lingers. It needs positions only, not the
-/// velocities that pressure, viscosity and the tides perturb particle by particle (the
-/// osculating eccentricity of a single particle carries its epicyclic noise). The
-/// eccentricity of a superhumping disk is excited at the 3:1 resonance near the disk's edge
-/// and lives in the outer disk: the inner disk stays circular and, holding much of the
-/// mass, would dilute the amplitude by its share; beyond R90 lie the sparse edge and the gas
-/// the stream has just shocked, lopsided by construction (it arrives from one side). The
-/// window [0.5, 1.0] R90 follows the disk as it grows, so the figure compares across
-/// snapshots and runs. Caveats: an eccentric ring that reaches beyond R90 loses part of its
-/// apoastron side to the window, which lowers the amplitude; a lopsided distribution of gas
-/// on circular orbits reads as eccentricity too (hence the osculating vector beside it); N
-/// particles placed at random give an amplitude of about 0.9/√N (the window's particle
-/// count is reported).
-pub const ECCENTRICITY_WINDOW: (f64, f64) = (0.5, 1.0);
+use crate::problems::cv::ECCENTRICITY_WINDOW;
+use crate::reports::run_config;
 
 /// The annulus, in units of R90, whose 10° sectors are searched for the brightest one.
 pub const SPOT_ANNULUS: (f64, f64) = (0.8, 1.2);
@@ -216,21 +197,7 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
     let b = Binary::new(&params);
     let period_days = params.period_days;
     let dimension = cfg.problem.dimension;
-    let index = SnapshotIndex::read(run)?;
-    let mut files: Vec<(String, f64)> = index
-        .snapshots
-        .iter()
-        .map(|s| (s.file.clone(), s.time))
-        .collect();
-    let last_t = files.last().map_or(f64::NEG_INFINITY, |f| f.1);
-    if run.join("final.hdf5").exists() {
-        let path = run.join("final.hdf5");
-        // read_snapshot's errors name the file.
-        let snap = read_snapshot_with_h(&path)?;
-        if snap.time > last_t + 1e-9 * last_t.abs().max(1.0) {
-            files.push(("final.hdf5".into(), snap.time));
-        }
-    }
+    let files = snapshots_with_final(run)?;
     if files.is_empty() {
         bail!(
             "{}: lists no snapshots (set `output.interval` to write some)",
