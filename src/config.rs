@@ -617,10 +617,10 @@ impl Config {
         }
         self.eos
             .validate()
-            .map_err(|e| anyhow::anyhow!("key `{}`", e.replacen(" must", "`: must", 1)))?;
+            .map_err(|e| anyhow::anyhow!("key `{}", e.replacen(" must", "`: must", 1)))?;
         self.artificial_viscosity
             .validate()
-            .map_err(|e| anyhow::anyhow!("key `{}`", e.replacen(" must", "`: must", 1)))?;
+            .map_err(|e| anyhow::anyhow!("key `{}", e.replacen(" must", "`: must", 1)))?;
         match self.time.end {
             Some(end) => positive("time.end", end)?,
             None if matches!(self.problem.kind, ProblemKind::Ring | ProblemKind::Disk) => {}
@@ -994,6 +994,20 @@ mod tests {
         assert!(e.contains("particles.h_factor"), "{e}");
         let e = load(SOD, &["eos.gamma=0.5"]).unwrap_err().to_string();
         assert!(e.contains("eos.gamma"), "{e}");
+        // The key in backticks, and no stray backtick after the value.
+        let e = format!("{:#}", load(SOD, &["eos.gamma=5e-324"]).unwrap_err());
+        assert!(
+            e.contains("key `eos.gamma`: must be > 1, got 5e-324"),
+            "{e}"
+        );
+        assert_eq!(e.matches('`').count() % 2, 0, "{e}");
+        assert!(!e.ends_with('`'), "{e}");
+        let e = format!(
+            "{:#}",
+            load(SOD, &["artificial_viscosity.alpha=9223372036854775807"]).unwrap_err()
+        );
+        assert!(e.contains("key `artificial_viscosity.alpha`: must"), "{e}");
+        assert!(!e.ends_with('`'), "{e}");
         let e = load(SOD, &["sedov.energy=1"]).unwrap_err().to_string();
         assert!(e.contains("key `sedov.energy` does not apply"), "{e}");
         let e = load(SOD, &["boundary.z=open"]).unwrap_err().to_string();

@@ -37,6 +37,11 @@ pub struct ArtificialViscosity {
     pub conductivity: f64,
 }
 
+/// The largest α, β or α_u accepted. Shock problems use α ≈ 1, β ≈ 2 (switches go up to
+/// α ≈ 2–3); a hundred times that leaves only time steps too short to run (and at ~10¹⁸ the
+/// forces overflow to infinity).
+pub const MAX_COEFFICIENT: f64 = 100.0;
+
 impl Default for ArtificialViscosity {
     fn default() -> Self {
         Self {
@@ -61,24 +66,18 @@ impl ArtificialViscosity {
         }
     }
 
+    /// Each coefficient must lie in [0, [`MAX_COEFFICIENT`]].
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.alpha >= 0.0 && self.alpha.is_finite()) {
-            return Err(format!(
-                "artificial_viscosity.alpha must be ≥ 0, got {}",
-                self.alpha
-            ));
-        }
-        if !(self.beta >= 0.0 && self.beta.is_finite()) {
-            return Err(format!(
-                "artificial_viscosity.beta must be ≥ 0, got {}",
-                self.beta
-            ));
-        }
-        if !(self.conductivity >= 0.0 && self.conductivity.is_finite()) {
-            return Err(format!(
-                "artificial_viscosity.conductivity must be ≥ 0, got {}",
-                self.conductivity
-            ));
+        for (key, v) in [
+            ("alpha", self.alpha),
+            ("beta", self.beta),
+            ("conductivity", self.conductivity),
+        ] {
+            if !((0.0..=MAX_COEFFICIENT).contains(&v)) {
+                return Err(format!(
+                    "artificial_viscosity.{key} must lie between 0 and {MAX_COEFFICIENT}, got {v:?}"
+                ));
+            }
         }
         Ok(())
     }

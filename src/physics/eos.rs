@@ -57,19 +57,19 @@ impl Eos {
     pub fn validate(&self) -> Result<(), String> {
         match *self {
             Eos::Ideal { gamma } if !(gamma > 1.0 && gamma.is_finite()) => {
-                Err(format!("eos.gamma must be > 1, got {gamma}"))
+                Err(format!("eos.gamma must be > 1, got {gamma:?}"))
             }
             Eos::Isothermal { cs } if !(cs > 0.0 && cs.is_finite()) => {
-                Err(format!("eos.cs must be > 0, got {cs}"))
+                Err(format!("eos.cs must be > 0, got {cs:?}"))
             }
             Eos::LocallyIsothermal { cs0, .. } if !(cs0 > 0.0 && cs0.is_finite()) => {
-                Err(format!("eos.cs0 must be > 0, got {cs0}"))
+                Err(format!("eos.cs0 must be > 0, got {cs0:?}"))
             }
             Eos::LocallyIsothermal { r0, .. } if !(r0 > 0.0 && r0.is_finite()) => {
-                Err(format!("eos.r0 must be > 0, got {r0}"))
+                Err(format!("eos.r0 must be > 0, got {r0:?}"))
             }
             Eos::LocallyIsothermal { q, .. } if !q.is_finite() => {
-                Err(format!("eos.q must be finite, got {q}"))
+                Err(format!("eos.q must be finite, got {q:?}"))
             }
             _ => Ok(()),
         }
