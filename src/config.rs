@@ -1000,7 +1000,7 @@ mod tests {
             e.contains("key `eos.gamma`: must be > 1, got 5e-324"),
             "{e}"
         );
-        assert_eq!(e.matches('`').count() % 2, 0, "{e}");
+        assert!(e.matches('`').count().is_multiple_of(2), "{e}");
         assert!(!e.ends_with('`'), "{e}");
         let e = format!(
             "{:#}",

@@ -86,7 +86,7 @@ fn one_error_line(
             lines[0]
         ));
     }
-    if lines[0].matches('`').count() % 2 != 0 {
+    if !lines[0].matches('`').count().is_multiple_of(2) {
         return Err(format!("{what}: a stray backtick: {}", lines[0]));
     }
     Ok(())
@@ -560,7 +560,7 @@ fn corrupted_checkpoints_and_snapshots_resume_or_fail_with_one_line_naming_the_f
                         let t = s(&f);
                         let v = ["render", &t, "--resolution", "32", "--out", "x.png"];
                         let a: Vec<String> = v.into_iter().map(String::from).collect();
-                        let victims = vec![f];
+                        let victims = [f];
                         let what = corrupt(&victims[0], &mut rng);
                         let o = sphdisk(&case_dir, &a, what);
                         let names = vec!["final.hdf5".to_string()];

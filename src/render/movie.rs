@@ -147,7 +147,7 @@ mod tests {
         let two = render_run(dir.path(), &opts, &dir.path().join("two")).unwrap();
         assert_eq!(two.len(), 2);
         // A final state at t = 2, after the last snapshot (t = 1): one more frame.
-        let mut last = read_snapshot(&dir.path().join("snap_0001.hdf5")).unwrap();
+        let mut last = crate::io::hdf5::read_snapshot(&dir.path().join("snap_0001.hdf5")).unwrap();
         last.time = 2.0;
         let meta = RunMetadata::default();
         write_snapshot(&dir.path().join("final.hdf5"), &last, &meta, 1).unwrap();
