@@ -497,51 +497,55 @@ impl LightcurveFigures {
     }
 }
 
-/// `q` and `period_days` of `run.toml`'s `[binary]`, read leniently: no file, no table or
-/// no keys give `None`s; a file that does not parse gives a note instead.
-pub(crate) fn binary_of(run: &Path) -> (Option<f64>, Option<f64>, Option<String>) {
+/// What `run.toml`'s `[binary]` says, read leniently: no file, no table or no keys give
+/// `None`s; a file that does not parse gives a note instead.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct RunBinary {
+    /// q = M2/M1 (`binary.q`, or `binary.m2_msun / binary.m1_msun`).
+    pub q: Option<f64>,
+    /// `binary.period_days`.
+    pub period_days: Option<f64>,
+    /// `binary.inclination`, its default where the table has a binary without the key.
+    pub inclination_deg: Option<f64>,
+    pub note: Option<String>,
+}
+
+/// [`RunBinary`] of the run in `run`.
+pub(crate) fn binary_of(run: &Path) -> RunBinary {
     let path = run.join("run.toml");
     let Ok(text) = std::fs::read_to_string(&path) else {
-        return (None, None, None);
+        return RunBinary::default();
     };
     let value: toml::Value = match text.parse() {
         Ok(v) => v,
         Err(e) => {
             let first = e.to_string();
             let first = first.lines().next().unwrap_or("").trim().to_string();
-            return (
-                None,
-                None,
-                Some(format!(
+            return RunBinary {
+                note: Some(format!(
                     "{}: not read ({first}); no physical values",
                     path.display()
                 )),
-            );
+                ..RunBinary::default()
+            };
         }
     };
     let Some(b) = value.get("binary") else {
-        return (None, None, None);
+        return RunBinary::default();
     };
-    let num = |k: &str| {
+    let number = |k: &str| {
         b.get(k)
             .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-            .filter(|v| v.is_finite() && *v > 0.0)
     };
-    let q = num("q").or_else(|| Some(num("m2_msun")? / num("m1_msun")?));
-    (q, num("period_days"), None)
-}
-
-/// `binary.inclination` of `run.toml`, read leniently (its default where the table has a
-/// binary without the key; `None` where there is no readable `run.toml` or no binary).
-fn inclination_of(run: &Path) -> Option<f64> {
-    let text = std::fs::read_to_string(run.join("run.toml")).ok()?;
-    let value: toml::Value = text.parse().ok()?;
-    let b = value.get("binary")?;
-    Some(
-        b.get("inclination")
-            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-            .unwrap_or(crate::analysis::observer::DEFAULT_INCLINATION_DEG),
-    )
+    let num = |k: &str| number(k).filter(|v| v.is_finite() && *v > 0.0);
+    RunBinary {
+        q: num("q").or_else(|| Some(num("m2_msun")? / num("m1_msun")?)),
+        period_days: num("period_days"),
+        inclination_deg: Some(
+            number("inclination").unwrap_or(crate::analysis::observer::DEFAULT_INCLINATION_DEG),
+        ),
+        note: None,
+    }
 }
 
 /// Reads `run/lightcurve.csv` (and `run/run.toml` if there), analyses it ([`analyse`]),
@@ -551,10 +555,10 @@ pub fn analyse_lightcurve(run: &Path, skip_orbits: f64, detrend: bool) -> Result
     let rows = read_lightcurve(&csv)?;
     let figures =
         analyse(&rows, skip_orbits, detrend).with_context(|| csv.display().to_string())?;
-    let (q, days, note) = binary_of(run);
-    let mut figures = figures.with_binary(q, days);
-    figures.notes.extend(note);
-    figures.orbital = orbital(&rows, skip_orbits, inclination_of(run))
+    let binary = binary_of(run);
+    let mut figures = figures.with_binary(binary.q, binary.period_days);
+    figures.notes.extend(binary.note);
+    figures.orbital = orbital(&rows, skip_orbits, binary.inclination_deg)
         .with_context(|| format!("{}: the observed light curve", csv.display()))?;
     let (rows, _) = supersede(&rows);
 

@@ -359,7 +359,11 @@ pub fn analyse_outbursts(run: &Path) -> Result<OutburstReport> {
         .with_context(|| run.join("monitor.csv").display().to_string())?;
     let modes = superhump::parse_modes(&read(run, "modes.csv", "the disk's modes")?)
         .with_context(|| run.join("modes.csv").display().to_string())?;
-    let (_, days, note) = lightcurve::binary_of(run);
+    let lightcurve::RunBinary {
+        period_days: days,
+        note,
+        ..
+    } = lightcurve::binary_of(run);
     let scale = match days {
         Some(d) => (d, "binary.period_days of run.toml".to_string()),
         None => (

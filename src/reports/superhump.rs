@@ -514,7 +514,7 @@ pub fn analyse_superhump(run: &Path) -> Result<SuperhumpReport> {
     let lc_path = run.join("lightcurve.csv");
     let light = lightcurve::read_lightcurve(&lc_path)?;
     let (light, _) = lightcurve::supersede(&light);
-    let (q, _, note) = lightcurve::binary_of(run);
+    let lightcurve::RunBinary { q, note, .. } = lightcurve::binary_of(run);
     let mut f = analyse(&modes, &light, q).with_context(|| run.display().to_string())?;
     f.notes.extend(note);
 
