@@ -466,6 +466,7 @@ impl<const D: usize> Run<D> {
             self.st.t,
             self.st.steps,
         );
+        s.kernel = self.cfg.particles.kernel;
         if let Some(g) = &self.phys.gravity {
             // At the origin of the run's frame, in the file's frame like the gas.
             s.point_masses.push(PointMassRecord {

@@ -281,12 +281,7 @@ fn encode_part(
 
     let mut hydro = fb.create_group("HydroScheme");
     hydro.set_attr("Scheme", AttrValue::AsciiString("sphdisk SPH".into()));
-    // The run's kernel, from its problem file (the cubic spline where it names none).
-    let kernel = meta
-        .parameters
-        .get("particles.kernel")
-        .and_then(|v| KernelKind::from_key(v.trim_matches('"')))
-        .unwrap_or_default();
+    let kernel = snap.kernel;
     hydro.set_attr(
         "Kernel function",
         AttrValue::AsciiString(kernel.description().into()),
@@ -875,8 +870,30 @@ fn read_one(path: &Path) -> Result<Part> {
         p: column(&["Pressures", "Pressure"], "Pressures")?.unwrap_or_else(zeros),
         diss: column(&["DissipationRates"], "DissipationRates")?.unwrap_or_else(zeros),
         point_masses: read_point_masses(&file, path)?,
+        kernel: read_kernel(&file),
     };
     Ok(Part::Data(Box::new(snap), num_files, this_file))
+}
+
+/// The run's kernel: `/HydroScheme` `Kernel function` (the description written from
+/// [`Snapshot::kernel`]), else `/Parameters` `particles:kernel`, else the cubic spline
+/// (files of other codes that name none).
+fn read_kernel(file: &File) -> KernelKind {
+    let text = |group: &str, key: &str| -> Option<String> {
+        let attrs = file.group(group).ok()?.attrs().ok()?;
+        match attrs.get(key)? {
+            AttrValue::AsciiString(s) | AttrValue::String(s) => Some(s.clone()),
+            AttrValue::AsciiStringSized { value, .. } | AttrValue::StringSized { value, .. } => {
+                Some(value.clone())
+            }
+            _ => None,
+        }
+        .map(|s| s.trim_end_matches('\0').trim().to_string())
+    };
+    text("HydroScheme", "Kernel function")
+        .and_then(|d| KernelKind::ALL.into_iter().find(|k| k.description() == d))
+        .or_else(|| text("Parameters", "particles:kernel").and_then(|k| KernelKind::from_key(&k)))
+        .unwrap_or_default()
 }
 
 fn read_point_masses(file: &File, path: &Path) -> Result<Vec<PointMassRecord>> {
@@ -939,6 +956,7 @@ mod tests {
                 vel: [0.0, 1.0, 0.0],
                 mass: 0.75,
             }],
+            kernel: KernelKind::Cubic,
         }
     }
 
@@ -963,7 +981,9 @@ mod tests {
     fn snapshot_round_trips_every_field_bit_for_bit() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("snap.hdf5");
-        let snap = sample(257, 3);
+        let mut snap = sample(257, 3);
+        // The kernel travels too (pictures spread particles with it).
+        snap.kernel = KernelKind::WendlandC4;
         write_snapshot(&path, &snap, &meta(), 1).unwrap();
         let back = read_snapshot(&path).unwrap();
         assert_eq!(back, snap);

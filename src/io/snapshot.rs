@@ -9,6 +9,7 @@
 
 use anyhow::{Result, bail};
 
+use crate::kernel::KernelKind;
 use crate::particles::Particles;
 
 /// One snapshot: the gas particles with their state, the box, the time, and any point masses.
@@ -39,6 +40,9 @@ pub struct Snapshot {
     pub diss: Vec<f64>,
     /// Point masses (central star, binary components): position and mass.
     pub point_masses: Vec<PointMassRecord>,
+    /// The kernel the run used (`particles.kernel`; SWIFT's `/HydroScheme` names it):
+    /// pictures spread each particle with it.
+    pub kernel: KernelKind,
 }
 
 /// A point mass as stored in a snapshot (SWIFT particle type 4 would be stars; we use type 3).
@@ -102,6 +106,8 @@ impl Snapshot {
             p: p.p.clone(),
             diss: p.diss.clone(),
             point_masses: Vec::new(),
+            // The caller knows the run's kernel (`Simulation::snapshot` sets it).
+            kernel: KernelKind::default(),
         }
     }
 

@@ -21,7 +21,19 @@
 //!   α(c_s) = α_c + (α_h − α_c) · clamp((c_s² − c_c²) / (c_h² − c_c²), 0, 1),
 //!
 //! so a heating front switches on α_h over a thermal time and a cooling front switches it
-//! off. Σ is the particle's density in 2D (the density of a 2D SPH disk is its surface
+//! off.
+//!
+//! Between the thresholds the S-curve has a third, unstable branch (Cannizzo et al. 1988;
+//! Lasota 2001, Fig. 3), which `unstable_branch = true` makes literal, straight in u
+//! between the ends of the stable branches:
+//!
+//!   u_mid(Σ) = u_c + (u_h − u_c) (Σ_max − Σ) / (Σ_max − Σ_min),
+//!
+//! and gas above u_mid heads for the hot branch, below it for the cold one. A heating
+//! transition begun where Σ passed Σ_max then runs on when Σ falls back a little (u_mid
+//! lies just above u_c there): the thermal runaway. Without it (the default) the branch
+//! flips at the mid-point of the targets, and gas whose noisy SPH Σ wanders about Σ_max
+//! keeps turning back half-heated. Σ is the particle's density in 2D (the density of a 2D SPH disk is its surface
 //! density) and √(2π) ρ H in 3D (H = c_s/Ω_K, the midplane estimate).
 
 use serde::{Deserialize, Serialize};
@@ -55,6 +67,11 @@ pub struct Outbursts {
     /// Thermal time in units of 1/Ω_K (default 1).
     #[serde(default = "one")]
     pub beta: f64,
+    /// Whether gas between the thresholds follows the S-curve's unstable middle branch
+    /// (default false: the branch flips at the mid-point of the targets). With it a
+    /// transition, once begun, runs away to the other branch (module doc).
+    #[serde(default)]
+    pub unstable_branch: bool,
 }
 
 fn one() -> f64 {
@@ -206,12 +223,34 @@ impl Outbursts {
         (std::f64::consts::TAU).sqrt() * rho * cs / omega
     }
 
-    /// du/dt of a particle: relaxation towards its (possibly new) branch's target.
+    /// The branch gas with internal energy `u` and surface density `sigma` at radius `r`
+    /// heads for: past a threshold the other branch; between them its own (the mid-point
+    /// rule) or the side of the unstable middle branch u_mid(Σ) it lies on.
+    pub fn target(&self, gamma: f64, u: f64, sigma: f64, r: f64) -> Branch {
+        if !self.unstable_branch {
+            return self.next_branch(self.branch(gamma, u), sigma, r);
+        }
+        let (lo, hi) = self.thresholds(r);
+        if sigma > hi {
+            return Branch::Hot;
+        }
+        if sigma < lo {
+            return Branch::Cold;
+        }
+        let (uc, uh) = (
+            self.branch_u(gamma, Branch::Cold),
+            self.branch_u(gamma, Branch::Hot),
+        );
+        let u_mid = uc + (uh - uc) * (hi - sigma) / (hi - lo);
+        if u > u_mid { Branch::Hot } else { Branch::Cold }
+    }
+
+    /// du/dt of a particle: relaxation towards the branch it heads for ([`Self::target`]).
     #[inline]
     pub fn rate(&self, gamma: f64, g: &PointMass, u: f64, sigma: f64, r: f64) -> f64 {
         let r = r.max(f64::MIN_POSITIVE);
         let omega = (g.gm / (r * r * r)).sqrt();
-        let target = self.next_branch(self.branch(gamma, u), sigma, r);
+        let target = self.target(gamma, u, sigma, r);
         -(u - self.branch_u(gamma, target)) * omega / self.beta
     }
 
@@ -258,6 +297,7 @@ mod tests {
             r0: 0.5,
             slope: 1.05,
             beta: 2.0,
+            unstable_branch: false,
         }
     }
 
@@ -305,6 +345,37 @@ mod tests {
         // The branch flips at the mid-point of the targets.
         assert_eq!(m.branch(GAMMA, 0.49 * (uc + uh)), Branch::Cold);
         assert_eq!(m.branch(GAMMA, 0.51 * (uc + uh)), Branch::Hot);
+    }
+
+    #[test]
+    fn on_the_unstable_branch_a_begun_transition_runs_away() {
+        let mut m = model();
+        let r = 0.5;
+        let (lo, hi) = m.thresholds(r);
+        let (uc, uh) = (
+            m.branch_u(GAMMA, Branch::Cold),
+            m.branch_u(GAMMA, Branch::Hot),
+        );
+        // Gas 15% of the way from u_c to u_h, heated while Σ was past Σ_max, with Σ back
+        // at 0.95 Σ_max = 1.9: u_mid lies (2 − 1.9) / (2 − 1) = 10% of the way.
+        let u = uc + 0.15 * (uh - uc);
+        let sigma = 0.95 * hi;
+        let u_mid = uc + (uh - uc) * (hi - sigma) / (hi - lo);
+        assert!(u > u_mid);
+        // The mid-point rule turns it back to cold; the unstable branch carries it on.
+        assert_eq!(m.target(GAMMA, u, sigma, r), Branch::Cold);
+        m.unstable_branch = true;
+        assert_eq!(m.target(GAMMA, u, sigma, r), Branch::Hot);
+        // A cooling transition likewise: 90% of the way up with Σ just above Σ_min.
+        let u = uc + 0.9 * (uh - uc);
+        assert_eq!(m.target(GAMMA, u, 1.05 * lo, r), Branch::Cold);
+        // The stable branches keep themselves between the thresholds, and the
+        // thresholds still force the jump.
+        let mid_sigma = 0.5 * (lo + hi);
+        assert_eq!(m.target(GAMMA, uc, mid_sigma, r), Branch::Cold);
+        assert_eq!(m.target(GAMMA, uh, mid_sigma, r), Branch::Hot);
+        assert_eq!(m.target(GAMMA, uc, 1.001 * hi, r), Branch::Hot);
+        assert_eq!(m.target(GAMMA, uh, 0.999 * lo, r), Branch::Cold);
     }
 
     #[test]

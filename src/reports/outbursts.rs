@@ -13,8 +13,10 @@
 //!   the hot branch, the largest disk radius R90 and the largest (one-orbit mean)
 //!   eccentricity.
 //! - **Superoutbursts.** An outburst during which the disk turned eccentric — its m = 1
-//!   amplitude reached [`SUPER_ECCENTRICITY`], three times what the stream's lopsided
-//!   impact alone holds — is a superoutburst; its light curve from the time e reached half
+//!   amplitude reached three times the circular disk's own (the 10% quantile of the run's
+//!   one-orbit mean, at least [`SUPER_ECCENTRICITY`]: three times what the stream's
+//!   lopsided impact alone holds; a coarse disk's particle noise holds more) — is a
+//!   superoutburst; its light curve from the time e reached half
 //!   its peak to the outburst's end is searched for the superhump (P_sh and ε, as
 //!   `analyse superhump` does: `reports::lightcurve`, periods 0.8–1.5 P_orb).
 //! - **Recurrence.** The intervals between successive outbursts' starts, in orbits, and in
@@ -97,7 +99,7 @@ pub struct Outburst {
     pub r_disk_max: f64,
     /// The largest one-orbit mean m = 1 amplitude.
     pub eccentricity_max: f64,
-    /// Whether the disk turned eccentric ([`SUPER_ECCENTRICITY`]).
+    /// Whether the disk turned eccentric ([`OutburstFigures::eccentricity_bar`]).
     pub superoutburst: bool,
     /// A superoutburst's superhump: P_sh (P_orb), ε and its error, amplitude (mag).
     pub superhump_period_orbits: Option<f64>,
@@ -111,6 +113,8 @@ pub struct Outburst {
 pub struct OutburstFigures {
     /// The analysed orbits.
     pub orbits: (f64, f64),
+    /// The m = 1 amplitude an outburst's disk must reach to be a superoutburst's.
+    pub eccentricity_bar: f64,
     /// Quiescent light L_q (code units).
     pub quiescent_light: f64,
     pub outbursts: Vec<Outburst>,
@@ -129,6 +133,19 @@ pub struct OutburstFigures {
     pub super_duration_orbits: Option<f64>,
     pub super_peak_mag: Option<f64>,
     pub notes: Vec<String>,
+}
+
+/// Three times the circular disk's m = 1 amplitude — the 10% quantile of `e_smooth` (a
+/// run spends more than a tenth of its time circular before any superoutburst) — and at
+/// least [`SUPER_ECCENTRICITY`].
+pub fn eccentricity_bar(e_smooth: &[f64]) -> f64 {
+    let mut e: Vec<f64> = e_smooth.iter().copied().filter(|v| v.is_finite()).collect();
+    if e.is_empty() {
+        return SUPER_ECCENTRICITY;
+    }
+    e.sort_by(f64::total_cmp);
+    let floor = e[(0.1 * (e.len() - 1) as f64).round() as usize];
+    SUPER_ECCENTRICITY.max(3.0 * floor)
 }
 
 fn mean(v: &[f64]) -> Option<f64> {
@@ -208,6 +225,7 @@ pub fn analyse(
         &modes.iter().map(|r| r.m1).collect::<Vec<_>>(),
         0.5 * SMOOTH_ORBITS,
     );
+    let eccentricity_bar = eccentricity_bar(&e_smooth);
     let mut notes = Vec::new();
     let mut outbursts = Vec::new();
     for &(s, e) in &stretches {
@@ -232,7 +250,7 @@ pub fn analyse(
             .map(|(a, b)| (*a, *b))
             .collect();
         let eccentricity_max = e_in.iter().map(|p| p.1).fold(0.0, f64::max);
-        let superoutburst = eccentricity_max >= SUPER_ECCENTRICITY;
+        let superoutburst = eccentricity_max >= eccentricity_bar;
         let mut ob = Outburst {
             start_orbit: s,
             end_orbit: e,
@@ -314,6 +332,7 @@ pub fn analyse(
         ));
     }
     Ok(OutburstFigures {
+        eccentricity_bar,
         orbits: (t[0], t[t.len() - 1]),
         quiescent_light: lq,
         normal_outbursts: outbursts.iter().filter(|o| !o.superoutburst).count(),
@@ -657,6 +676,31 @@ mod tests {
             err < 5e-3 && (e - 0.03).abs() < 3.0 * err.max(1e-4),
             "{e} ± {err}"
         );
+    }
+
+    #[test]
+    fn a_coarse_disks_noise_does_not_make_a_normal_outburst_super() {
+        // A coarse disk: the circular disk's m = 1 noise is 0.02 (not 0.01) and a normal
+        // outburst lifts it to 0.04 — past SUPER_ECCENTRICITY = 0.03, not past three times
+        // the run's own floor (0.06); the superoutburst's eccentric disk (0.17) is.
+        let peak = 10f64.powf(0.4 * 3.0);
+        let bursts = [
+            (10.0, 1.0, 4.0, 3.0, peak, false),
+            (50.0, 1.0, 4.0, 3.0, peak, false),
+            (90.0, 1.0, 25.0, 4.0, 10f64.powf(0.4 * 3.5), true),
+        ];
+        let (light, monitor, mut modes) = synthetic(140.0, &bursts, 1.03, 0.1);
+        for (m, r) in modes.iter_mut().zip(&monitor) {
+            let in_super = m.m1 > 0.01 + 1e-12;
+            m.m1 += 0.01;
+            if !in_super {
+                m.m1 += 0.02 * r.hot_mass;
+            }
+        }
+        let f = analyse(&light, &monitor, &modes, (0.0631209, "test".into())).unwrap();
+        assert!((f.eccentricity_bar - 0.06).abs() < 1e-9, "{}", f.eccentricity_bar);
+        assert_eq!((f.normal_outbursts, f.superoutbursts), (2, 1), "{f:#?}");
+        assert!(f.outbursts[..2].iter().all(|o| o.eccentricity_max > 0.039));
     }
 
     #[test]
