@@ -1,7 +1,9 @@
 //! Fuzzes the command line with a seeded generator: problem files from `problems/` with a key
 //! dropped, duplicated, retyped or set to an absurd value (1e308, -1, 0, NaN, inf, huge
-//! arrays), `--set` overrides of the same kinds, and checkpoints and snapshots with random
-//! bytes overwritten or cut short. Every case must end either with exit 0 and finite
+//! arrays), `--set` overrides of the same kinds and plausible ones (the problem's own values
+//! ×0.5–×2, small integers, other accepted names: these mostly run, so that the fuzz reaches
+//! the simulation and not only the checks), and checkpoints and snapshots with random bytes
+//! overwritten or cut short. Every case must end either with exit 0 and finite
 //! outputs, or with exit 2 and one `error:` line naming the key or the file — never a
 //! panic, an abort or a hang (each case is killed after a time limit and fails).
 
