@@ -564,7 +564,7 @@ fn a_run_larger_than_the_memory_is_refused_naming_the_key() {
 fn nonsense_that_used_to_pass_is_named() {
     let d = tempfile::tempdir().unwrap();
     let sod = problem("sod.toml");
-    let cases: [(&str, &[&str], &[&str]); 7] = [
+    let cases: [(&str, &[&str], &[&str]); 9] = [
         // An array where a table { rho, p, v } belongs was read as ρ = 1, p = 2.
         ("sod.toml", &["sod.left=[1, 2]"], &["sod.left", "table"]),
         // Infinities and NaN: named by key, not by what they do to particle 0.
@@ -600,6 +600,18 @@ fn nonsense_that_used_to_pass_is_named() {
             &["time.courant=1e-300"],
             &["time.max_steps", "time.courant"],
         ),
+        // An end so early that E t² underflows: the exact blast of the end-of-run errors
+        // had a shock radius of 0 and integrated 0/0 for hours (found by tests/fuzz.rs).
+        (
+            "sedov.toml",
+            &["time.end=1e-300"],
+            &["time.end", "shock radius"],
+        ),
+        (
+            "sedov2d.toml",
+            &["time.end=5e-324"],
+            &["time.end", "shock radius"],
+        ),
     ];
     for (file, sets, expect) in cases {
         let out = d.path().join("out");
@@ -610,6 +622,166 @@ fn nonsense_that_used_to_pass_is_named() {
         for s in sets {
             args.extend(["--set", s]);
         }
-        assert_fails(d.path(), &args, expect);
+        assert_refused_in_time(d.path(), &args, expect);
     }
+}
+
+/// A clean refusal within 20 s (a hang fails): exit 2, one `error:` line holding every word
+/// of `expect`.
+fn assert_refused_in_time(dir: &Path, args: &[&str], expect: &[&str]) {
+    let (code, err) = common::sphdisk_within(dir, args, 20.0);
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    assert_eq!(code, 2, "{args:?}: {err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{args:?}: expected one line, got {err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    for e in expect {
+        assert!(err.contains(e), "{args:?}: `{e}` not in: {err}");
+    }
+}
+
+#[test]
+fn analyse_sod_refuses_what_is_not_this_shock_tube_naming_the_file() {
+    let d = tempfile::tempdir().unwrap();
+    let run = |file: &str, out: &str, sets: &[&str]| {
+        let p = problem(file);
+        let mut args = vec!["--threads", "1", "run", &p, "--quiet", "--out", out];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        let (code, err) = sphdisk(d.path(), &args);
+        assert_eq!(code, 0, "{file}: {err}");
+    };
+    run("sod.toml", "tube", &["particles.n=40"]);
+    run("sedov2d.toml", "blast", &["particles.n=12"]);
+    // The blast's final.hdf5 copied into the tube's folder: run.toml says "sod", the file
+    // is a 2D blast; it used to be plotted against the tube's solution with exit 0.
+    let tube = d.path().join("tube");
+    let mixed = d.path().join("mixed");
+    std::fs::create_dir(&mixed).unwrap();
+    for f in ["run.toml", "snapshots.json"] {
+        std::fs::copy(tube.join(f), mixed.join(f)).unwrap();
+    }
+    std::fs::copy(d.path().join("blast/final.hdf5"), mixed.join("final.hdf5")).unwrap();
+    assert_refused_in_time(
+        d.path(),
+        &["analyse", "sod", "mixed"],
+        &["mixed/final.hdf5", "2D \"sedov\"", "1D \"sod\""],
+    );
+    assert!(!mixed.join("sod.png").exists());
+    // Another problem's folder, by its run.toml; a snapshot given for the folder.
+    assert_refused_in_time(
+        d.path(),
+        &["analyse", "sod", "blast"],
+        &["blast", "not a shock-tube run", "sedov"],
+    );
+    assert_refused_in_time(
+        d.path(),
+        &["analyse", "sod", "tube/final.hdf5"],
+        &["tube/final.hdf5", "not a run folder"],
+    );
+    // The tube itself still analyses.
+    let (code, err) = sphdisk(d.path(), &["analyse", "sod", "tube"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(tube.join("sod.png").exists());
+}
+
+#[test]
+fn analyse_ring_refuses_an_edited_summary_or_snapshot_naming_it() {
+    use sphdisk::io::hdf5::{RunMetadata, read_parameters, read_snapshot, write_snapshot};
+    let d = tempfile::tempdir().unwrap();
+    let p = problem("ring.toml");
+    let (code, err) = sphdisk(
+        d.path(),
+        &[
+            "--threads",
+            "1",
+            "run",
+            &p,
+            "--quiet",
+            "--out",
+            "ring",
+            "--set",
+            "particles.n=12",
+            "--set",
+            "ring.tau_end=0.02",
+            "--set",
+            "ring.output_tau=[0.018]",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let ring = d.path().join("ring");
+    let (code, err) = sphdisk(d.path(), &["analyse", "ring", "ring"]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(ring.join("summary.json")).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+    // Each used to loop forever in the plot (mass 0, r0 = 1e308), panic (r0 < 0, ν < 0,
+    // τ_start < 0, spacing 0) or print an L1 error of NaN (spacing 1e300).
+    let edits: [(&str, f64); 10] = [
+        ("mass", 0.0),
+        ("mass", -1.0),
+        ("r0", 1e308),
+        ("r0", -1.0),
+        ("nu", -1.0),
+        ("nu", 0.0),
+        ("tau_start", -1.0),
+        ("spacing", 0.0),
+        ("spacing", 1e-300),
+        ("spacing", 1e300),
+    ];
+    for (k, (key, value)) in edits.into_iter().enumerate() {
+        let edited = d.path().join(format!("e{k}"));
+        std::fs::create_dir(&edited).unwrap();
+        for e in std::fs::read_dir(&ring).unwrap() {
+            let e = e.unwrap();
+            if e.path().is_file() {
+                std::fs::copy(e.path(), edited.join(e.file_name())).unwrap();
+            }
+        }
+        let mut s = summary.clone();
+        s["ring"][key] = serde_json::json!(value);
+        std::fs::write(edited.join("summary.json"), s.to_string()).unwrap();
+        let dir = format!("e{k}");
+        assert_refused_in_time(
+            d.path(),
+            &["analyse", "ring", &dir],
+            &[&format!("{dir}/summary.json"), &format!("`ring.{key}`")],
+        );
+    }
+    // No summary; a summary without its ring entry.
+    let bare = d.path().join("bare");
+    std::fs::create_dir(&bare).unwrap();
+    assert_refused_in_time(
+        d.path(),
+        &["analyse", "ring", "bare"],
+        &["bare", "summary.json"],
+    );
+    let mut s = summary.clone();
+    s.as_object_mut().unwrap().remove("ring");
+    std::fs::write(bare.join("summary.json"), s.to_string()).unwrap();
+    assert_refused_in_time(
+        d.path(),
+        &["analyse", "ring", "bare"],
+        &["bare", "summary.json", "`ring`"],
+    );
+    // A NaN coordinate in a snapshot: refused naming the file and the field.
+    let snap_path = ring.join("snap_0001.hdf5");
+    let mut snap = read_snapshot(&snap_path).unwrap();
+    snap.pos[1][3] = f64::NAN;
+    let meta = RunMetadata {
+        parameters: read_parameters(&snap_path)
+            .unwrap()
+            .into_iter()
+            .map(|(k, v)| (k.replacen(':', ".", 1), v))
+            .collect(),
+        units: Default::default(),
+        periodic: false,
+        physical: false,
+    };
+    write_snapshot(&snap_path, &snap, &meta, 1).unwrap();
+    assert_refused_in_time(
+        d.path(),
+        &["analyse", "ring", "ring"],
+        &["ring/snap_0001.hdf5", "Coordinates"],
+    );
 }

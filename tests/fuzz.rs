@@ -1,10 +1,13 @@
 //! Fuzzes the command line with a seeded generator: problem files from `problems/` with a key
 //! dropped, duplicated, retyped or set to an absurd value (1e308, -1, 0, NaN, inf, huge
-//! arrays), `--set` overrides of the same kinds, and checkpoints and snapshots with random
-//! bytes overwritten or cut short. Every case must end either with exit 0 and finite
+//! arrays), `--set` overrides of the same kinds and plausible ones (the problem's own values
+//! ×0.5–×2, small integers, other accepted names: these mostly run, so that the fuzz reaches
+//! the simulation and not only the checks), and checkpoints and snapshots with random bytes
+//! overwritten or cut short. Every case must end either with exit 0 and finite
 //! outputs, or with exit 2 and one `error:` line naming the key or the file — never a
 //! panic, an abort or a hang (each case is killed after a time limit and fails).
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -106,10 +109,29 @@ fn finite_outputs(out: &Path, skip: &[PathBuf], what: &str) -> Result<(), String
         }
     }
     if let Ok(json) = std::fs::read_to_string(out.join("summary.json")) {
-        for bad in ["null", "NaN", "inf"] {
+        for bad in ["NaN", "inf"] {
             if json.contains(bad) {
                 return Err(format!("{what}: summary.json has {bad}:\n{json}"));
             }
+        }
+        // Every number present; null only for the energy drift of a gas whose u is not
+        // evolved (isothermal: no energy to conserve, as `io::summary` documents).
+        let mut v: serde_json::Value = serde_json::from_str(&json)
+            .map_err(|e| format!("{what}: summary.json does not parse: {e}"))?;
+        let run: toml::Table = std::fs::read_to_string(out.join("run.toml"))
+            .ok()
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_default();
+        let ideal = run
+            .get("eos")
+            .and_then(|e| e.get("kind"))
+            .and_then(|k| k.as_str())
+            == Some("ideal");
+        if !ideal && v["conservation"]["energy"].is_null() {
+            v["conservation"]["energy"] = serde_json::json!(0.0);
+        }
+        if v.to_string().contains("null") {
+            return Err(format!("{what}: summary.json has null:\n{json}"));
         }
     }
     let mut files: Vec<PathBuf> = checkpoint::list(out).unwrap_or_default();
@@ -183,6 +205,12 @@ fn bases() -> Vec<(&'static str, toml::Table)> {
             if particles.contains_key("n") {
                 particles.insert("n".into(), toml::Value::Integer(small));
             }
+            // The 3D tube's cross-section holds two kernel supports of its coarse lattice.
+            if let Some(sod) = t.get_mut("sod").and_then(|s| s.as_table_mut())
+                && dim == 3
+            {
+                sod.insert("width".into(), toml::Value::Float(1.0));
+            }
             (*name, t)
         })
         .collect()
@@ -232,6 +260,108 @@ fn bad_value(rng: &mut Rng, huge_len: usize) -> toml::Value {
         21 => V::Float(1e30),
         22 => V::Integer(1_000_000),
         _ => V::Float(-1e-300),
+    }
+}
+
+/// Every value a string key takes in the problem files, and the names every enum key
+/// accepts: the choices a plausible override of that key picks from.
+fn string_choices(bases: &[(&str, toml::Table)]) -> BTreeMap<String, BTreeSet<String>> {
+    let mut choices: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (_, t) in bases {
+        let mut all = Vec::new();
+        paths(t, "", &mut all);
+        for p in all {
+            if let Some(toml::Value::String(s)) = value_at(t, &p) {
+                choices.entry(p).or_default().insert(s.clone());
+            }
+        }
+    }
+    let enums: [(&str, &[&str]); 5] = [
+        ("boundary.x", &["periodic", "reflecting", "open"]),
+        ("boundary.y", &["periodic", "reflecting", "open"]),
+        ("boundary.z", &["periodic", "reflecting", "open"]),
+        (
+            "particles.kernel",
+            &[
+                "cubic",
+                "quintic",
+                "wendland_c2",
+                "wendland_c4",
+                "wendland_c6",
+            ],
+        ),
+        ("eos.kind", &["ideal", "isothermal", "locally_isothermal"]),
+    ];
+    for (key, names) in enums {
+        let set = choices.entry(key.to_string()).or_default();
+        set.extend(names.iter().map(|n| n.to_string()));
+    }
+    choices
+}
+
+/// The value at the dotted `path` of `t`.
+fn value_at<'a>(t: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
+    let (first, rest) = path
+        .split_once('.')
+        .map_or((path, None), |(a, b)| (a, Some(b)));
+    let v = t.get(first)?;
+    match (rest, v) {
+        (None, _) => Some(v),
+        (Some(r), toml::Value::Table(sub)) => value_at(sub, r),
+        _ => None,
+    }
+}
+
+/// A factor between ×0.5 and ×2, even in the logarithm.
+fn factor(rng: &mut Rng) -> f64 {
+    2f64.powf(2.0 * (rng.next_u64() % 1001) as f64 / 1000.0 - 1.0)
+}
+
+/// A value a user might well write for the key at `path` whose problem-file value is `v`:
+/// a number ×0.5–×2 (an integer rounded, a zero a small number), a small integer, another
+/// name the key accepts, the other boolean; arrays and inline tables element by element.
+fn plausible_value(
+    rng: &mut Rng,
+    path: &str,
+    v: &toml::Value,
+    choices: &BTreeMap<String, BTreeSet<String>>,
+) -> toml::Value {
+    use toml::Value as V;
+    match v {
+        V::Float(x) if *x == 0.0 => V::Float([0.0, 0.01, 0.05, 0.1][(rng.next_u64() % 4) as usize]),
+        V::Float(x) => V::Float(x * factor(rng)),
+        V::Integer(n) if *n <= 0 || rng.next_u64().is_multiple_of(4) => {
+            V::Integer(1 + (rng.next_u64() % 8) as i64)
+        }
+        V::Integer(n) => V::Integer(((*n as f64 * factor(rng)).round() as i64).max(1)),
+        V::String(s) => {
+            let names: Vec<&String> = choices
+                .get(path)
+                .map(|c| c.iter().collect())
+                .unwrap_or_default();
+            if names.is_empty() {
+                V::String(s.clone())
+            } else {
+                V::String(names[(rng.next_u64() % names.len() as u64) as usize].clone())
+            }
+        }
+        V::Boolean(b) => V::Boolean(!b),
+        V::Array(a) => V::Array(
+            a.iter()
+                .map(|x| plausible_value(rng, path, x, choices))
+                .collect(),
+        ),
+        V::Table(t) => V::Table(
+            t.iter()
+                .map(|(k, x)| {
+                    (
+                        k.clone(),
+                        plausible_value(rng, &format!("{path}.{k}"), x, choices),
+                    )
+                })
+                .collect(),
+        ),
+        other => other.clone(),
     }
 }
 
@@ -378,26 +508,45 @@ fn mutated_problem_files_run_or_fail_with_one_line_naming_the_key() {
 fn fuzzed_overrides_run_or_fail_with_one_line_naming_the_key() {
     let mut rng = Rng::new(1717);
     let bases = bases();
-    let (mut ran, mut refused) = (0, 0);
     let mut defects = Vec::new();
     let dir = tempfile::tempdir().unwrap();
+    let choices = string_choices(&bases);
+    // (ran, refused) of the absurd and of the plausible overrides.
+    let mut counts = [(0, 0); 2];
     for case in 0..120 {
         let (name, base) = &bases[(rng.next_u64() % bases.len() as u64) as usize];
         let mut all = Vec::new();
         paths(base, "", &mut all);
-        let key = match rng.next_u64() % 8 {
-            0 => "no.such.key".to_string(),
-            1 => vec!["a"; 30_000].join("."),
-            2 => "particles..n".to_string(),
-            _ => all[(rng.next_u64() % all.len() as u64) as usize].clone(),
-        };
-        let value = match rng.next_u64() % 6 {
-            0 => "nan".to_string(),
-            1 => "1e999".to_string(),
-            2 => "[1, 2".to_string(),
-            // A command-line argument holds at most 128 KiB.
-            _ => toml::Value::to_string(&bad_value(&mut rng, 10_000)),
-        };
+        let plausible = rng.next_u64() % 10 < 6;
+        let mut sets = Vec::new();
+        if plausible {
+            // One to three keys of the problem set to values a user might write.
+            let leaves: Vec<&String> = all
+                .iter()
+                .filter(|p| !matches!(value_at(base, p), Some(toml::Value::Table(_))))
+                .collect();
+            for _ in 0..1 + rng.next_u64() % 3 {
+                let key = leaves[(rng.next_u64() % leaves.len() as u64) as usize];
+                let v = value_at(base, key).unwrap();
+                let value = plausible_value(&mut rng, key, v, &choices);
+                sets.push((key.clone(), toml::Value::to_string(&value)));
+            }
+        } else {
+            let key = match rng.next_u64() % 8 {
+                0 => "no.such.key".to_string(),
+                1 => vec!["a"; 30_000].join("."),
+                2 => "particles..n".to_string(),
+                _ => all[(rng.next_u64() % all.len() as u64) as usize].clone(),
+            };
+            let value = match rng.next_u64() % 6 {
+                0 => "nan".to_string(),
+                1 => "1e999".to_string(),
+                2 => "[1, 2".to_string(),
+                // A command-line argument holds at most 128 KiB.
+                _ => toml::Value::to_string(&bad_value(&mut rng, 10_000)),
+            };
+            sets.push((key, value));
+        }
         let case_dir = dir.path().join(format!("o{case}"));
         std::fs::create_dir_all(&case_dir).unwrap();
         let mut text = toml::to_string(base).unwrap();
@@ -405,12 +554,17 @@ fn fuzzed_overrides_run_or_fail_with_one_line_naming_the_key() {
         let small = case_dir.join(name);
         std::fs::write(&small, text).unwrap();
         let mut args = run_args(&s(&small), "out");
-        args.push("--set".into());
-        args.push(format!("{key}={value}"));
-        let what = format!("override case {case} ({name}, {key}={:.40})", value);
+        let mut names = vec!["--set".to_string()];
+        let mut shown = Vec::new();
+        for (key, value) in &sets {
+            args.push("--set".into());
+            args.push(format!("{key}={value}"));
+            names.extend(names_for(key, name));
+            shown.push(format!("{key:.40}={value:.40}"));
+        }
+        let what = format!("override case {case} ({name}, {})", shown.join(" "));
         let o = sphdisk(&case_dir, &args, &what);
-        let mut names = names_for(&key, name);
-        names.push("--set".into());
+        let count = &mut counts[usize::from(plausible)];
         if judge(
             o,
             &case_dir.join("out"),
@@ -420,15 +574,25 @@ fn fuzzed_overrides_run_or_fail_with_one_line_naming_the_key() {
             &args,
             &mut defects,
         ) {
-            ran += 1;
+            count.0 += 1;
         } else {
-            refused += 1;
+            count.1 += 1;
         }
         std::fs::remove_dir_all(&case_dir).unwrap();
     }
-    eprintln!("fuzzed overrides: {ran} ran, {refused} refused by name");
+    let [(ran_absurd, refused_absurd), (ran, refused)] = counts;
+    eprintln!(
+        "fuzzed overrides: absurd {ran_absurd} ran, {refused_absurd} refused by name; \
+         plausible {ran} ran, {refused} refused by name"
+    );
     no_defects(&defects, 120);
-    assert!(ran > 0 && refused > 0);
+    assert!(refused_absurd > 0 && ran > 0 && refused > 0);
+    // Most plausible overrides run: the fuzz reaches the simulation, not only the checks.
+    assert!(
+        ran + ran_absurd >= 36,
+        "only {} of 120 override cases ran",
+        ran + ran_absurd
+    );
 }
 
 /// Overwrites random bytes of `f`, cuts it short, or both.

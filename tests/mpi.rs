@@ -242,3 +242,46 @@ fn mpi_l1_stream_is_the_same_on_1_2_and_3_ranks() {
     };
     assert_eq!(rows(&a), rows(&b), "lightcurve.csv rows");
 }
+
+#[test]
+fn mpi_checkpoints_carry_the_run_id_and_another_runs_is_refused_on_2_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    let sets = ["--set", "output.checkpoint_steps=2", "--stop-after", "4"];
+    for out in [&a, &b] {
+        run_ok(2, "sod.toml", out, &sets);
+    }
+    let id = |out: &Path| {
+        std::fs::read_to_string(out.join("run.id"))
+            .unwrap()
+            .trim()
+            .to_string()
+    };
+    assert_ne!(id(&a), id(&b), "two runs, two identities");
+    // Rank 0 writes the checkpoints of a distributed run: each carries the folder's run id.
+    for out in [&a, &b] {
+        let list = checkpoint::list(out).unwrap();
+        assert_eq!(list.len(), 2, "{}", out.display());
+        for ckpt in list {
+            let (text, _) = checkpoint::read::<1>(&ckpt).unwrap();
+            let state: serde_json::Value = serde_json::from_str(&text.state_json).unwrap();
+            assert_eq!(
+                state["run_id"].as_str(),
+                Some(id(out).as_str()),
+                "{}",
+                ckpt.display()
+            );
+        }
+    }
+    // a's newest checkpoint in place of b's: `--resume` under mpirun -n 2 refuses it by
+    // name and resumes nothing.
+    let newest_b = checkpoint::list(&b).unwrap().remove(0);
+    let newest_a = checkpoint::list(&a).unwrap().remove(0);
+    std::fs::copy(&newest_a, &newest_b).unwrap();
+    let b_s = b.to_string_lossy();
+    let (code, err, _) = mpirun(2, &["run", "--quiet", "--resume", &b_s], &[]);
+    assert_ne!(code, 0, "{err}");
+    let name = newest_b.file_name().unwrap().to_string_lossy();
+    assert!(err.contains(&*name) && err.contains("another run"), "{err}");
+    assert!(!b.join("summary.json").exists(), "nothing was resumed");
+}

@@ -198,3 +198,88 @@ fn a_snapshot_with_bad_particles_is_refused_naming_the_file_and_the_field() {
         "{err}"
     );
 }
+
+#[test]
+fn nothing_in_the_frame_is_refused_naming_the_file() {
+    use sphdisk::io::hdf5::{RunMetadata, read_parameters, read_snapshot, write_snapshot};
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("blast");
+    let run_s = run.to_string_lossy().into_owned();
+    let (code, _, err) = sphdisk(&[
+        "--threads",
+        "1",
+        "run",
+        &problem("sedov2d.toml"),
+        "--quiet",
+        "--out",
+        &run_s,
+        "--set",
+        "particles.n=12",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let good = run.join("final.hdf5");
+    let meta = RunMetadata {
+        parameters: read_parameters(&good)
+            .unwrap()
+            .into_iter()
+            .map(|(k, v)| (k.replacen(':', ".", 1), v))
+            .collect(),
+        units: Default::default(),
+        periodic: false,
+        physical: false,
+    };
+    // A snapshot without particles: it used to be drawn blank over the box with the
+    // invented colour range 1e-4 .. 1.
+    let mut empty = read_snapshot(&good).unwrap();
+    for v in empty.pos.iter_mut().chain(empty.vel.iter_mut()) {
+        v.clear();
+    }
+    for v in [
+        &mut empty.mass,
+        &mut empty.h,
+        &mut empty.rho,
+        &mut empty.u,
+        &mut empty.p,
+        &mut empty.diss,
+    ] {
+        v.clear();
+    }
+    empty.id.clear();
+    let none = run.join("none.hdf5");
+    write_snapshot(&none, &empty, &meta, 1).unwrap();
+    let none_s = none.to_string_lossy().into_owned();
+    let png = dir.path().join("x.png");
+    let png_s = png.to_string_lossy().into_owned();
+    let good_s = good.to_string_lossy().into_owned();
+    let far: [&[&str]; 3] = [
+        &["render", &none_s, "--out", &png_s],
+        // Every particle outside the requested frame, or in 3D outside the slice.
+        &[
+            "render", &good_s, "--xlim", "100,101", "--ylim", "100,101", "--out", &png_s,
+        ],
+        &[
+            "render", &run_s, "--xlim", "100,101", "--ylim", "100,101", "--out", &png_s,
+        ],
+    ];
+    let expect = [
+        (none_s.as_str(), "no particles"),
+        (good_s.as_str(), "none of its"),
+        (run_s.as_str(), "none of its"),
+    ];
+    for (args, (file, why)) in far.iter().zip(expect) {
+        let (code, out, err) = sphdisk(args);
+        assert_eq!(code, 2, "{args:?}: {out}{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(file) && err.contains(why),
+            "{args:?}: {err}"
+        );
+        assert!(!png.exists(), "{args:?} drew {}", png.display());
+    }
+    // The frame that holds the blast still draws.
+    let (code, _, err) = sphdisk(&[
+        "render", &good_s, "--xlim", "0,1", "--ylim", "0,1", "--out", &png_s,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(is_png(&png));
+}

@@ -425,6 +425,12 @@ where
         Ok((ys, k[6], err))
     };
 
+    // A non-finite end (a radius ratio of 0/0) would spend every step on NaN trials.
+    if !(x_end - x0).is_finite() {
+        return Err(format!(
+            "sedov: similarity integration from {x0} to {x_end} is not over a finite range"
+        ));
+    }
     let mut x = x0;
     let mut y = y0;
     let mut k0 = rhs(x, &y)?;

@@ -34,6 +34,66 @@ pub struct RingRecord {
     pub spacing: f64,
 }
 
+impl RingRecord {
+    /// Refuses a record the exact solution and the averaging cannot use (an edited or
+    /// foreign `summary.json`), naming the entry: every figure positive and finite,
+    /// τ_end > τ_start, annuli between 10⁻⁶ R0 and R0 wide, and Σ in units of M/(π R0²)
+    /// representable.
+    pub fn check(&self) -> Result<()> {
+        for (name, v) in [
+            ("mass", self.mass),
+            ("r0", self.r0),
+            ("nu", self.nu),
+            ("tau_start", self.tau_start),
+            ("gm", self.gm),
+            ("spacing", self.spacing),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                bail!(
+                    "`ring.{name}` must be a positive finite number, got {}",
+                    show(v)
+                );
+            }
+        }
+        if !(self.tau_end > self.tau_start && self.tau_end.is_finite()) {
+            bail!(
+                "`ring.tau_end` must be finite and above `ring.tau_start` = {}, got {}",
+                show(self.tau_start),
+                show(self.tau_end)
+            );
+        }
+        if !(self.spacing <= self.r0 && self.spacing >= 1e-6 * self.r0) {
+            bail!(
+                "`ring.spacing` = {} must lie between 1e-6 and 1 times `ring.r0` = {} (the \
+                 width of the averaging annuli)",
+                show(self.spacing),
+                show(self.r0)
+            );
+        }
+        let scale = std::f64::consts::PI * self.r0 * self.r0 / self.mass;
+        let rate = 12.0 * self.nu / (self.r0 * self.r0);
+        if !(scale.is_normal() && rate.is_normal()) {
+            bail!(
+                "`ring.r0` = {}, `ring.mass` = {} and `ring.nu` = {}: π R0²/M or 12 ν/R0² \
+                 is out of range",
+                show(self.r0),
+                show(self.mass),
+                show(self.nu)
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A number as a message shows it: plainly, or with an exponent where it is huge or tiny.
+fn show(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 fn params(cfg: &Config) -> RingParams {
     cfg.ring.clone().unwrap_or_default()
 }

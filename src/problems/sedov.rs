@@ -37,6 +37,20 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
             s.deposit_radius
         );
     }
+    // The exact solution the run is measured against at its end: a shock radius that
+    // underflows (E t² below the smallest double) has no profile to integrate.
+    if let Some(t_end) = cfg.time.end {
+        let g = gamma(cfg)?;
+        let radius = sedov_shock_radius(s.energy, s.rho0, t_end, g, D).unwrap_or(f64::NAN);
+        if !radius.is_normal() {
+            bail!(
+                "key `time.end`: the blast's shock radius at t = {t_end:e} is {radius:e}, out \
+                 of the range of a double (with `sedov.energy` = {}, `sedov.rho0` = {})",
+                s.energy,
+                s.rho0
+            );
+        }
+    }
     let n = cfg.particles.n.unwrap_or(0);
     let dx = s.length / n as f64;
     let h = smoothing_length(cfg, dx);

@@ -14,7 +14,7 @@ use crate::io::hdf5::Units;
 use crate::io::snapshot::Snapshot;
 use crate::render::colormap::{ColorRange, Colormap, Scale};
 use crate::render::interpolate::{
-    Extent, Frame, Quantity, View, interpolate, with_periodic_images,
+    Extent, Frame, Quantity, View, interpolate_counted, with_periodic_images,
 };
 use crate::render::overlay::{PixelMap, draw_roche};
 use crate::render::plot::ensure_font;
@@ -105,16 +105,42 @@ pub fn frame_for(snap: &Snapshot, opts: &RenderOptions) -> Result<Frame> {
     Ok(frame)
 }
 
-/// Interpolates the field of `opts` without drawing it (movies: fields first, one range).
-pub fn render_field(snap: &Snapshot, opts: &RenderOptions) -> Result<(Vec<f64>, Frame)> {
+/// Interpolates the field of `opts` without drawing it (movies: fields first, one range);
+/// also returns how many particles reach the frame.
+pub fn render_field(snap: &Snapshot, opts: &RenderOptions) -> Result<(Vec<f64>, Frame, usize)> {
     let frame = frame_for(snap, opts)?;
-    let field = if opts.periodic {
+    let (field, reached) = if opts.periodic {
         let imaged = with_periodic_images(snap, opts.view);
-        interpolate(&imaged, opts.quantity, opts.view, &frame, opts.slice_z)?
+        interpolate_counted(&imaged, opts.quantity, opts.view, &frame, opts.slice_z)?
     } else {
-        interpolate(snap, opts.quantity, opts.view, &frame, opts.slice_z)?
+        interpolate_counted(snap, opts.quantity, opts.view, &frame, opts.slice_z)?
     };
-    Ok((field, frame))
+    Ok((field, frame, reached))
+}
+
+/// The refusal of a picture no particle reaches: a blank field has no colour range, and
+/// one invented for it would draw nothing as if it were something.
+pub fn nothing_to_draw(snap: &Snapshot, opts: &RenderOptions, frame: &Frame) -> anyhow::Error {
+    if snap.is_empty() {
+        return anyhow!("the snapshot holds no particles: nothing to draw");
+    }
+    let slice = if opts.view == View::Slice && snap.dimension == 3 {
+        " or the slice z = ".to_string()
+            + &opts
+                .slice_z
+                .map_or("middle of the box".into(), |z| format!("{z}"))
+    } else {
+        String::new()
+    };
+    anyhow!(
+        "none of its {} particles reaches the frame x ∈ [{}, {}], y ∈ [{}, {}]{slice}: \
+         nothing to draw (--xlim, --ylim)",
+        snap.len(),
+        frame.x.0,
+        frame.x.1,
+        frame.y.0,
+        frame.y.1
+    )
 }
 
 /// Interpolates and draws `snap` as `opts` says into the PNG `path` (written atomically).
@@ -126,7 +152,10 @@ pub fn render_png(snap: &Snapshot, opts: &RenderOptions, path: &Path) -> Result<
             path.join("picture.png").display()
         );
     }
-    let (field, frame) = render_field(snap, opts)?;
+    let (field, frame, reached) = render_field(snap, opts)?;
+    if reached == 0 {
+        return Err(nothing_to_draw(snap, opts, &frame));
+    }
     let range_used = draw_png(snap, &field, &frame, opts, path)?;
     Ok(RenderedImage {
         field,
@@ -698,7 +727,7 @@ mod tests {
             opts.resolution = (120, 120);
             opts.roche_q = q;
             let frame = frame_for(&snap, &opts).unwrap();
-            let (field, _) = render_field(&snap, &opts).unwrap();
+            let (field, _, _) = render_field(&snap, &opts).unwrap();
             let range = ColorRange::new(1e-3, 10.0, Scale::Log).unwrap();
             let ((w, h), _) = picture_size(&frame);
             let k = upscale(frame.nx, frame.ny) as i32;

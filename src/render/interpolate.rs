@@ -668,6 +668,17 @@ pub fn interpolate(
     frame: &Frame,
     slice_z: Option<f64>,
 ) -> Result<Vec<f64>> {
+    interpolate_counted(snap, quantity, view, frame, slice_z).map(|(field, _)| field)
+}
+
+/// [`interpolate`], with the number of particles that reach the frame (0: a blank field).
+pub fn interpolate_counted(
+    snap: &Snapshot,
+    quantity: Quantity,
+    view: View,
+    frame: &Frame,
+    slice_z: Option<f64>,
+) -> Result<(Vec<f64>, usize)> {
     frame.check()?;
     check_lengths(snap)?;
     let footprint = match (snap.dimension, view) {
@@ -921,7 +932,7 @@ pub fn interpolate(
             .enumerate()
             .for_each(|(b, num)| deposit(b, num, None));
     }
-    Ok(field)
+    Ok((field, splats.len()))
 }
 
 /// The column density (3D: projected along the view; 2D: the surface density).

@@ -9,7 +9,9 @@ use anyhow::{Context, Result, bail};
 
 use crate::io::hdf5::read_snapshot_with_h;
 use crate::io::snapshot_index::snapshots_with_final;
-use crate::render::image::{RenderOptions, common_range, default_extent, draw_png, render_field};
+use crate::render::image::{
+    RenderOptions, common_range, default_extent, draw_png, nothing_to_draw, render_field,
+};
 use crate::render::interpolate::Extent;
 
 /// Renders every snapshot of the run in `run` — those `snapshots.json` lists and the final
@@ -26,7 +28,6 @@ pub fn render_run(run: &Path, opts: &RenderOptions, out: &Path) -> Result<Vec<Pa
             run.display()
         );
     }
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let mut snaps = Vec::with_capacity(files.len());
     for (file, _) in &files {
         snaps.push((file, read_snapshot_with_h(&run.join(file))?.in_run_frame()));
@@ -43,10 +44,25 @@ pub fn render_run(run: &Path, opts: &RenderOptions, out: &Path) -> Result<Vec<Pa
     // Fields first (one range for all), then pictures.
     let mut fields = Vec::with_capacity(snaps.len());
     for (file, snap) in snaps {
-        let (field, frame) =
+        let (field, frame, reached) =
             render_field(&snap, &fixed).with_context(|| format!("rendering {file}"))?;
-        fields.push((snap, field, frame));
+        fields.push((snap, field, frame, reached));
     }
+    // A frame some snapshots leave empty is drawn in the others' range; none reached at all
+    // leaves no range to draw with.
+    if fields.iter().all(|f| f.3 == 0) {
+        let (snap, _, frame, _) = &fields[fields.len() - 1];
+        let (last, _) = &files[files.len() - 1];
+        return Err(nothing_to_draw(snap, &fixed, frame)).with_context(|| {
+            format!(
+                "{}: all {} snapshots would be blank; the last, {last}",
+                run.display(),
+                files.len()
+            )
+        });
+    }
+    let fields: Vec<_> = fields.into_iter().map(|(s, f, fr, _)| (s, f, fr)).collect();
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     if fixed.range.is_none() {
         let all: Vec<&[f64]> = fields.iter().map(|(_, f, _)| f.as_slice()).collect();
         fixed.range = Some(common_range(&all, opts.scale));

@@ -160,6 +160,17 @@ pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
 pub fn plot_panels(path: &Path, size: (u32, u32), panels: &[Panel]) -> Result<()> {
     ensure_font();
     let err = |e: &dyn std::fmt::Display| anyhow!("cannot draw {}: {e}", path.display());
+    // plotters looks for tick positions without end on an axis that is not finite.
+    for panel in panels {
+        for (axis, (lo, hi)) in [("x", panel.x_range), ("y", panel.y_range)] {
+            if !(lo.is_finite() && hi.is_finite() && (hi - lo).is_finite()) {
+                return Err(err(&format!(
+                    "the {axis} axis of \"{}\" would run from {lo} to {hi}",
+                    panel.title
+                )));
+            }
+        }
+    }
     let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let areas = root.split_evenly((1, panels.len().max(1)));
@@ -276,6 +287,30 @@ mod tests {
         plot_panels(&path, (400, 300), &[panel]).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(&bytes[1..4], b"PNG");
+    }
+
+    #[test]
+    fn an_axis_that_is_not_finite_is_refused_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.png");
+        for (x_range, y_range) in [
+            ((0.0, 1.0), (0.0, f64::INFINITY)),
+            ((0.0, 1.0), (f64::NAN, 1.0)),
+            ((-1e308, 1e308), (0.0, 1.0)),
+        ] {
+            let panel = Panel {
+                title: "Σ".into(),
+                x_label: "x".into(),
+                y_label: "y".into(),
+                x_range,
+                y_range,
+                series: Vec::new(),
+            };
+            let e = plot_panels(&path, (400, 300), &[panel])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("p.png") && e.contains("axis of \"Σ\""), "{e}");
+        }
     }
 
     #[test]

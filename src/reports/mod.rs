@@ -20,6 +20,13 @@ use crate::config::{Config, ProblemKind};
 /// The problem file a run saved (`run.toml` in its folder), which must be of `kind`;
 /// `what` names that kind in the error ("a shock-tube run").
 pub fn run_config(run: &Path, kind: ProblemKind, what: &str) -> Result<Config> {
+    if run.is_file() {
+        bail!(
+            "{}: a file, not a run folder: give the folder {what} wrote (its run.toml names \
+             the problem)",
+            run.display()
+        );
+    }
     let cfg = Config::load(&run.join("run.toml"), &[])
         .with_context(|| format!("{}: the run's problem file (run.toml)", run.display()))?;
     if cfg.problem.kind != kind {

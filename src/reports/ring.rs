@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 
 use crate::analysis::annulus_stats;
 use crate::io::atomic::write_atomic;
@@ -30,6 +30,8 @@ pub fn analyse_ring(run: &Path) -> Result<RingReport> {
             run.display()
         )
     })?;
+    rec.check()
+        .with_context(|| format!("{}", run.join("summary.json").display()))?;
     let sol = exact(&rec);
     let index = SnapshotIndex::read(run)?;
     let scale = std::f64::consts::PI * rec.r0 * rec.r0 / rec.mass;
@@ -43,12 +45,50 @@ pub fn analyse_ring(run: &Path) -> Result<RingReport> {
     let mut band = Vec::new();
     let mut scatter = Vec::new();
     let mut last_tau = rec.tau_start;
-    let snaps: Vec<_> = index.snapshots.iter().filter(|s| s.time > 0.0).collect();
-    for (k, snap) in snaps.iter().enumerate() {
-        let p = read_snapshot_with_h(&run.join(&snap.file))?.to_particles::<2>()?;
-        let tau = tau_at(&rec, snap.time);
-        let stats = annulus_stats(&p, rec.spacing);
-        let l1 = ring_l1(&rec, &p, snap.time);
+    // Each snapshot at its own time (the index's may have been edited).
+    let mut snaps = Vec::new();
+    for entry in &index.snapshots {
+        let path = run.join(&entry.file);
+        let snap = read_snapshot_with_h(&path)?;
+        if snap.time > 0.0 {
+            let p = snap
+                .to_particles::<2>()
+                .with_context(|| path.display().to_string())?;
+            snaps.push((path, snap.time, p));
+        }
+    }
+    if snaps.is_empty() {
+        bail!(
+            "{}: no snapshot after t = 0 to compare (snapshots.json lists {})",
+            run.display(),
+            index.snapshots.len()
+        );
+    }
+    for (k, (path, time, p)) in snaps.iter().enumerate() {
+        let time = *time;
+        // One annulus of `spacing` out to the farthest particle: a bounded number.
+        let rmax = (0..p.len())
+            .map(|i| p.pos[0][i].hypot(p.pos[1][i]))
+            .fold(0.0, f64::max);
+        if rmax / rec.spacing > MAX_ANNULI {
+            bail!(
+                "{}: a particle lies at R = {rmax:e}, more than {MAX_ANNULI:e} annuli of \
+                 `ring.spacing` = {} out: too far to average",
+                path.display(),
+                rec.spacing
+            );
+        }
+        let tau = tau_at(&rec, time);
+        let stats = annulus_stats(p, rec.spacing);
+        let l1 = ring_l1(&rec, p, time);
+        if !l1.is_finite() {
+            bail!(
+                "{}: the particles fill fewer than two annuli of `ring.spacing` = {}: no \
+                 Σ(R) to compare",
+                path.display(),
+                rec.spacing
+            );
+        }
         let _ = writeln!(errors, "{tau},{l1}");
         l1s.push((tau, l1));
         let mut avg = Vec::new();
@@ -158,5 +198,8 @@ pub fn analyse_ring(run: &Path) -> Result<RingReport> {
         l1: l1s,
     })
 }
+
+/// Most averaging annuli out to the farthest particle (10⁷: 10⁶ per R0 out to 10 R0).
+const MAX_ANNULI: f64 = 1e7;
 
 const RGB_BLACK: plotters::style::RGBColor = plotters::style::RGBColor(0, 0, 0);

@@ -9,7 +9,7 @@ use anyhow::{Result, bail};
 
 use crate::config::ProblemKind;
 use crate::io::atomic::write_atomic;
-use crate::io::hdf5::read_snapshot_with_h;
+use crate::io::hdf5::{read_parameters, read_snapshot_with_h};
 use crate::problems::sod::{params, solution};
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
 use crate::reports::run_config;
@@ -17,7 +17,21 @@ use crate::reports::run_config;
 /// Reads `run.toml` and `final.hdf5` of a shock-tube run and writes the plot and the CSV.
 pub fn analyse_sod(run: &Path) -> Result<Vec<PathBuf>> {
     let cfg = run_config(run, ProblemKind::Sod, "a shock-tube run")?;
-    let snap = read_snapshot_with_h(&run.join("final.hdf5"))?;
+    let fin = run.join("final.hdf5");
+    let snap = read_snapshot_with_h(&fin)?;
+    // The snapshot must be this tube's: a file copied in from another run is refused, not
+    // plotted against a solution it does not follow.
+    let kind = read_parameters(&fin)?.get("problem:kind").cloned();
+    let dimension = cfg.dimension();
+    if snap.dimension != dimension || kind.as_deref().is_some_and(|k| k != "sod") {
+        bail!(
+            "{}: not a snapshot of this shock tube: {}D{} while run.toml is a {dimension}D \
+             \"sod\" run",
+            fin.display(),
+            snap.dimension,
+            kind.map(|k| format!(" \"{k}\"")).unwrap_or_default()
+        );
+    }
     let s = params(&cfg);
     let sol = solution(&cfg)?;
     let t = snap.time;

@@ -127,3 +127,33 @@ pub fn assert_same_state<const D: usize>(
     }
     eprintln!("{what}: largest difference {worst:.1e} of the rms");
 }
+
+/// [`sphdisk_cli`] that fails the test when the command runs past `limit` seconds (a hang)
+/// instead of waiting for it; returns (exit code, stderr).
+#[allow(dead_code)]
+pub fn sphdisk_within(dir: &Path, args: &[&str], limit: f64) -> (i32, String) {
+    let err_path = dir.join(".stderr");
+    let err_file = std::fs::File::create(&err_path).unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_sphdisk"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(err_file)
+        .spawn()
+        .expect("sphdisk starts");
+    let t0 = std::time::Instant::now();
+    let status = loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            break st;
+        }
+        if t0.elapsed().as_secs_f64() > limit {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("{args:?}: still running after {limit} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    let err = std::fs::read_to_string(&err_path).unwrap_or_default();
+    std::fs::remove_file(&err_path).unwrap();
+    (status.code().unwrap_or(-1), err)
+}
