@@ -207,6 +207,6 @@ with tempfile.TemporaryDirectory() as tmp:
     assert np.allclose(np.sort(sigma_ss.to("g/cm**2").value), np.sort(sigma_h5), rtol=1e-4,
                        atol=0), "swiftsimio's Σ in g/cm²"
     print(f"yt: G = 1 ring in [units] M_sun, au: length unit {ds.length_unit.to('AU')}, "
-          f"Σ {sigma_yt.to('g/cm**2').min():.4g}..{sigma_yt.to('g/cm**2').max():.4g} "
+          f"Σ {sigma_yt.to('g/cm**2').d.min():.4g}..{sigma_yt.to('g/cm**2').d.max():.4g} "
           f"g/cm² (= h5py's, swiftsimio's)")
 print("snapshot checks passed")
