@@ -1475,3 +1475,34 @@ pub fn default_out_dir(problem: &Path) -> PathBuf {
         .unwrap_or_else(|| "run".into());
     PathBuf::from("runs").join(stem)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_h_of_a_run_from_a_file() {
+        let sod = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/sod.toml");
+        let cfg = Config::load(&sod, &[]).unwrap();
+        // One h in the file (sphdisk's snapshots): taken.
+        let (h, note) = initial_h_from_file(&cfg, 0.5, &[0.02; 4]);
+        assert_eq!(h, 0.02);
+        assert!(note.contains("from the file's SmoothingLengths"), "{note}");
+        // Varying h (SWIFT, Phantom): their median, the range in the note.
+        let (h, note) = initial_h_from_file(&cfg, 0.5, &[0.04, 0.01, 0.03, 0.02, 0.05]);
+        assert_eq!(h, 0.03);
+        assert!(
+            note.contains("median") && note.contains("from 0.01 to 0.05"),
+            "{note}"
+        );
+        // None (GADGET initial conditions read as 0): the problem's.
+        let (h, note) = initial_h_from_file(&cfg, 0.5, &[0.0; 3]);
+        assert_eq!(h, 0.5);
+        assert!(note.contains("no smoothing lengths"), "{note}");
+        // particles.h given: it wins, and the note says the file's are not used.
+        let cfg = Config::load(&sod, &["particles.h=0.007".into()]).unwrap();
+        let (h, note) = initial_h_from_file(&cfg, 0.5, &[0.02; 4]);
+        assert_eq!(h, 0.007);
+        assert!(note.contains("not used"), "{note}");
+    }
+}
