@@ -11,6 +11,13 @@
 3. swiftsimio (SWIFT's own reader) loads a 3D and a 2D snapshot with units: every
    particle, the stored masses and densities, the header's time and dimension.
 4. With physical units ([units]), `Temperatures` in K: swiftsimio and yt read them.
+5. Where yt puts a disk and what it calls its units (README, "Snapshots in yt"): yt's SWIFT
+   front end fixes the domain's left edge at 0 (particles at negative coordinates are not
+   read), so the run's origin is at `Header/Shift` in yt; the ring's central mass is there,
+   its gas is centred on it, and a projection centred on it is made. yt takes the units
+   from `/Units` only (its `units_override` is overwritten by the front end): with
+   Phantom's units in `[units]` (M_sun, au, G = 1) yt's lengths are in au, and the 2D
+   `Densities` relabelled mass/length² equal the file's Σ in g/cm² (and swiftsimio's).
 
 Usage: scripts/check_snapshots.py [path/to/sphdisk]   (default target/release/sphdisk)
 """
@@ -163,4 +170,43 @@ with tempfile.TemporaryDirectory() as tmp:
     with h5py.File(snap, "r") as f:
         assert "Temperatures" not in f["PartType0"], "no kelvin without [units]"
     print(f"Temperatures: {t_file.min():.4g}..{t_file.max():.4g} K (swiftsimio, yt)")
+
+    # 5. The disk's centre in yt, and yt's units of a G = 1 disk in Phantom's units.
+    ds = yt.load(str(ring_snap))
+    ad = ds.all_data()
+    shift = ds.arr(np.asarray(ds.parameters["header"]["Shift"], dtype=float), "code_length")
+    star = ad["PartType3", "Coordinates"][0]
+    assert np.array_equal(np.asarray(star), np.asarray(shift)), (star, shift)
+    pos = ad["PartType0", "Coordinates"]
+    m = ad["PartType0", "Mass"]
+    com = (pos * m[:, None]).sum(axis=0) / m.sum() - shift
+    assert float(np.abs(com[:2]).max()) < 0.05 and float(com[2]) == 0.0, com
+    png = yt.ProjectionPlot(ds, "z", ("gas", "density"), center=shift,
+                            width=(4, "code_length")).save(str(tmp / "ring_yt.png"))
+    assert pathlib.Path(png[0]).stat().st_size > 0, png
+    print(f"yt: the ring's centre is Header/Shift = {np.asarray(shift)}, gas centre of mass "
+          f"- Shift = {np.asarray(com)}, projection {pathlib.Path(png[0]).name}")
+    msun, au, g_cgs = 1.98847e33, 1.495978707e13, 6.6743e-8
+    t_unit = (au**3 / (g_cgs * msun)) ** 0.5
+    run("ring.toml", tmp / "ru", "particles.n=20", "ring.tau_end=0.017",
+        "output.interval=0.01", f"units.mass_cgs={msun}", f"units.length_cgs={au}",
+        f"units.time_cgs={t_unit}")
+    usnap = tmp / "ru" / "snap_0001.hdf5"
+    ds = yt.load(str(usnap), units_override={"length_unit": (1.0, "pc")})
+    assert abs(float(ds.length_unit.to("AU")) - 1.0) < 1e-9, ds.length_unit
+    rho_code = ds.all_data()["gas", "density"].to("code_mass/code_length**3").d
+    sigma_yt = ds.arr(rho_code, "code_mass/code_length**2")
+    with h5py.File(usnap, "r") as f:
+        rho = f["PartType0/Densities"]
+        sigma_h5 = rho[:] * rho.attrs[
+            "Conversion factor to CGS (not including cosmological corrections)"][0]
+    assert np.allclose(np.sort(sigma_yt.to("g/cm**2").d), np.sort(sigma_h5), rtol=1e-12,
+                       atol=0), "Σ in g/cm²"
+    # swiftsimio expresses the same factor in its own solar mass: equal to 1e-4.
+    sigma_ss = swiftsimio.load(str(usnap)).gas.densities
+    assert np.allclose(np.sort(sigma_ss.to("g/cm**2").value), np.sort(sigma_h5), rtol=1e-4,
+                       atol=0), "swiftsimio's Σ in g/cm²"
+    print(f"yt: G = 1 ring in [units] M_sun, au: length unit {ds.length_unit.to('AU')}, "
+          f"Σ {sigma_yt.to('g/cm**2').d.min():.4g}..{sigma_yt.to('g/cm**2').d.max():.4g} "
+          f"g/cm² (= h5py's, swiftsimio's)")
 print("snapshot checks passed")

@@ -562,7 +562,7 @@ pub fn run_in_team<const D: usize>(
     } else {
         None
     };
-    let mut run = start_fresh::<D>(cfg, opts)?;
+    let (mut run, notes) = start_fresh::<D>(cfg, opts)?;
     let mut log = if team.is_root() {
         // Only now that the set-up stands: a failed one loses nothing.
         if opts.force {
@@ -581,13 +581,17 @@ pub fn run_in_team<const D: usize>(
         RunLog::silent()
     };
     log.line(&format!(
-        "start {}: {} particles, {D}D, t_end = {}, {} ranks × {} threads",
+        "start {}: {} particles, {D}D, t = {}, t_end = {}, {} ranks × {} threads",
         cfg.name(),
         run.p.len(),
+        run.st.t,
         run.st.t_end,
         team.ranks(),
         rayon::current_num_threads()
     ));
+    for note in &notes {
+        log.line(note);
+    }
     if !run.st.out_times.is_empty() {
         let all = team.is_root().then(|| run.p.clone());
         run.write_snapshot(&opts.out, all.as_ref(), &mut log)?;
@@ -680,7 +684,8 @@ pub fn snapshot_times(
 }
 
 /// Set-up, the first evaluation, and the snapshot times of a new run.
-fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>> {
+/// Also returns lines for `run.log` on where a `--from` run's h and start time came from.
+fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<(Run<D>, Vec<String>)> {
     let InitialState {
         particles,
         bx,
@@ -691,31 +696,56 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
         injector,
     } = problems::setup::<D>(cfg)?;
     let mut injector = injector;
-    let particles = match &opts.from {
-        None => particles,
+    let mut notes = Vec::new();
+    let (particles, h, t0) = match &opts.from {
+        None => (particles, h, 0.0),
         Some(path) => {
-            let p = read_snapshot(path)?
-                .to_particles::<D>()
-                .with_context(|| format!("--from {}", path.display()))?;
+            let what = || format!("--from {}", path.display());
+            let snap = read_snapshot(path)?;
+            let p = snap.to_particles::<D>().with_context(what)?;
+            let t0 = snap.time;
+            if t0 < 0.0 {
+                bail!("{}: Header/Time = {t0} is before 0", what());
+            }
+            let (h, note) = initial_h_from_file(cfg, h, &snap.h);
+            notes.push(format!("{}: {note}", what()));
             let state = InitialState::new(p, bx, h);
             problems::check_initial_state(&state, cfg.particles.kernel)
                 .and_then(|_| crate::limits::check_grid(cfg, &bx, h, &state.particles.pos))
-                .with_context(|| format!("--from {}", path.display()))?;
+                .with_context(what)?;
             if let Some(inj) = &mut injector {
                 // New stream particles take ids after the file's.
                 inj.next_id = inj
                     .next_id
                     .max(state.particles.id.iter().max().map_or(0, |m| m + 1));
             }
-            state.particles
+            if t0 > 0.0 {
+                notes.push(format!(
+                    "{}: the run starts at the file's time t = {t0}",
+                    what()
+                ));
+            }
+            (state.particles, h, t0)
         }
     };
     let problem_times = output_times.clone();
-    let (t_end, out_times) = snapshot_times(cfg, problem_t_end, output_times)?;
+    let (t_end, mut out_times) = snapshot_times(cfg, problem_t_end, output_times)?;
+    if t0 > 0.0 {
+        if !(t_end > t0) {
+            bail!(
+                "key `time.end`: {t_end} is not after t = {t0}, the time of {} where the run starts (give a later time.end, e.g. --set time.end={})",
+                opts.from
+                    .as_ref()
+                    .map_or(String::new(), |p| p.display().to_string()),
+                2.0 * t0
+            );
+        }
+        out_times.retain(|&x| x > t0 + 1e-12 * t_end);
+    }
 
     let zero = TotalsRecord::from(&particles.totals(None));
     let st = LoopState {
-        t: 0.0,
+        t: t0,
         steps: 0,
         t_end,
         h,
@@ -747,6 +777,10 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
         max_isolated_energy_fraction: 0.0,
     };
     let mut run = Run::new(cfg.clone(), particles, st, bx);
+    if let (Some(mt), Some(inj)) = (&run.mt, &mut run.st.injector) {
+        // A stream continued from a file's time: releases before it are not made up.
+        mt.skip_releases_before(inj, t0);
+    }
     let mut stats = rhs(&mut run.p, &run.bx, &run.phys, run.window);
     if let Some(p0) = pressure_equilibrium {
         for i in 0..run.p.len() {
@@ -782,7 +816,46 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<Run<D>
     run.st.peak_bytes = stats.peak_window_bytes;
     run.st.ghosts = stats.ghosts;
     run.st.interactions_sum = run.p.interactions.iter().map(|&k| k as u64).sum();
-    Ok(run)
+    Ok((run, notes))
+}
+
+/// The constant smoothing length of a run from a file (`--from`) whose particles carry
+/// `file_h`, with a line saying where it came from. `particles.h`, when the problem file
+/// (or `--set`) gives it, wins; otherwise the file's h: its value when every particle has
+/// the same, else the median (sphdisk runs at one h); a file without smoothing lengths
+/// (GADGET initial conditions: 0) leaves the problem's `problem_h` (`h_factor` × spacing).
+pub fn initial_h_from_file(cfg: &Config, problem_h: f64, file_h: &[f64]) -> (f64, String) {
+    let has_h = !file_h.is_empty() && file_h.iter().all(|&x| x > 0.0 && x.is_finite());
+    if !has_h {
+        return (
+            problem_h,
+            format!("h = {problem_h} from the problem (the file has no smoothing lengths)"),
+        );
+    }
+    let mut sorted = file_h.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let (lo, hi) = (sorted[0], sorted[sorted.len() - 1]);
+    let range = if hi > lo {
+        format!("from {lo} to {hi}")
+    } else {
+        format!("{lo}")
+    };
+    if let Some(h) = cfg.particles.h {
+        return (
+            h,
+            format!("h = {h} from particles.h; the file's SmoothingLengths ({range}) are not used"),
+        );
+    }
+    if hi == lo {
+        return (lo, format!("h = {lo} from the file's SmoothingLengths"));
+    }
+    let median = sorted[sorted.len() / 2];
+    (
+        median,
+        format!(
+            "h = {median}, the median of the file's SmoothingLengths ({range}): sphdisk runs at one h (set particles.h to choose it)"
+        ),
+    )
 }
 
 /// The step loop, from wherever `run` stands to the end time (or `opts.stop_after`).
@@ -1402,4 +1475,35 @@ pub fn default_out_dir(problem: &Path) -> PathBuf {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "run".into());
     PathBuf::from("runs").join(stem)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_h_of_a_run_from_a_file() {
+        let sod = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/sod.toml");
+        let cfg = Config::load(&sod, &[]).unwrap();
+        // One h in the file (sphdisk's snapshots): taken.
+        let (h, note) = initial_h_from_file(&cfg, 0.5, &[0.02; 4]);
+        assert_eq!(h, 0.02);
+        assert!(note.contains("from the file's SmoothingLengths"), "{note}");
+        // Varying h (SWIFT, Phantom): their median, the range in the note.
+        let (h, note) = initial_h_from_file(&cfg, 0.5, &[0.04, 0.01, 0.03, 0.02, 0.05]);
+        assert_eq!(h, 0.03);
+        assert!(
+            note.contains("median") && note.contains("from 0.01 to 0.05"),
+            "{note}"
+        );
+        // None (GADGET initial conditions read as 0): the problem's.
+        let (h, note) = initial_h_from_file(&cfg, 0.5, &[0.0; 3]);
+        assert_eq!(h, 0.5);
+        assert!(note.contains("no smoothing lengths"), "{note}");
+        // particles.h given: it wins, and the note says the file's are not used.
+        let cfg = Config::load(&sod, &["particles.h=0.007".into()]).unwrap();
+        let (h, note) = initial_h_from_file(&cfg, 0.5, &[0.02; 4]);
+        assert_eq!(h, 0.007);
+        assert!(note.contains("not used"), "{note}");
+    }
 }

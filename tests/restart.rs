@@ -460,3 +460,87 @@ fn resumed_l1_stream_is_bit_identical_with_the_same_time_series_and_budget() {
         );
     }
 }
+
+#[test]
+fn a_run_from_a_snapshot_starts_at_its_time_with_its_h() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b, c) = (
+        dir.path().join("a"),
+        dir.path().join("b"),
+        dir.path().join("c"),
+    );
+    let p = problem("sedov2d.toml");
+    let small = ["--quiet", "--set", "particles.n=16"];
+    // A snapshot at t = 0.1, h = 1.6 × spacing.
+    ok(&[
+        &["run", &p, "--out", &s(&a), "--set", "time.end=0.1"][..],
+        &small[..],
+    ]
+    .concat());
+    let file = s(&a.join("final.hdf5"));
+    let from = read_snapshot(&a.join("final.hdf5")).unwrap();
+    assert_eq!(from.time, 0.1);
+    let file_h = from.h[0];
+
+    // From it with another h_factor: the run starts at 0.1 with the file's h.
+    ok(&[
+        &["run", &p, "--out", &s(&b), "--from", &file][..],
+        &["--set", "time.end=0.14", "--set", "particles.h_factor=1.3"][..],
+        &small[..],
+    ]
+    .concat());
+    let index: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(b.join("snapshots.json")).unwrap()).unwrap();
+    let times: Vec<f64> = index["snapshots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["time"].as_f64().unwrap())
+        .collect();
+    // The start (0.1) and the interval's multiples after it (0.12); none before.
+    assert_eq!(times.len(), 2, "{times:?}");
+    assert_eq!(times[0], 0.1);
+    assert!((times[1] - 0.12).abs() < 1e-12, "{times:?}");
+    let first = read_snapshot(&b.join("snap_0000.hdf5")).unwrap();
+    assert_eq!(first.time, 0.1);
+    assert_eq!(first.h[0], file_h);
+    let end = read_snapshot(&b.join("final.hdf5")).unwrap();
+    assert!((end.time - 0.14).abs() < 1e-12, "{}", end.time);
+    assert!(end.h.iter().all(|&h| h == file_h));
+    let log = std::fs::read_to_string(b.join("run.log")).unwrap();
+    assert!(log.contains("from the file's SmoothingLengths"), "{log}");
+    assert!(log.contains("starts at the file's time t = 0.1"), "{log}");
+
+    // particles.h given by the user wins over the file, and run.log says so.
+    ok(&[
+        &["run", &p, "--out", &s(&c), "--from", &file][..],
+        &["--set", "time.end=0.11", "--set", "particles.h=0.11"][..],
+        &small[..],
+    ]
+    .concat());
+    assert!(
+        read_snapshot(&c.join("final.hdf5"))
+            .unwrap()
+            .h
+            .iter()
+            .all(|&h| h == 0.11)
+    );
+    let log = std::fs::read_to_string(c.join("run.log")).unwrap();
+    assert!(log.contains("h = 0.11 from particles.h"), "{log}");
+
+    // An end time not after the file's time is refused, naming time.end.
+    let (code, err) = sphdisk(&[
+        "run",
+        &p,
+        "--quiet",
+        "--out",
+        &s(&dir.path().join("d")),
+        "--from",
+        &file,
+        "--set",
+        "particles.n=16",
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("time.end") && err.contains("0.1"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+}

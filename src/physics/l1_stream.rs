@@ -184,6 +184,15 @@ impl L1Stream {
         self.start + k as f64 / self.rate
     }
 
+    /// Releases due strictly before time `t`.
+    pub fn due_before(&self, t: f64) -> u64 {
+        let mut n = self.due(t);
+        while n > 0 && self.release_time(n - 1) >= t {
+            n -= 1;
+        }
+        n
+    }
+
     /// Releases due by time `t` (particles k with t_k ≤ t and t_k < stop).
     fn due(&self, t: f64) -> u64 {
         let until = t.min(self.stop);

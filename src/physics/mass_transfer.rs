@@ -92,6 +92,13 @@ impl MassTransfer {
         gone
     }
 
+    /// Counts the stream's releases due before time `t` as made (a run that starts at `t`).
+    pub fn skip_releases_before(&self, st: &mut InjectorState, t: f64) {
+        if let Some(s) = &self.stream {
+            st.released = st.released.max(s.due_before(t));
+        }
+    }
+
     /// Inserts the stream's particles due by time `t`, books them, and gives them the
     /// binary's gravity as their acceleration (the SPH forces follow at the next step).
     /// Returns how many were inserted.

@@ -412,11 +412,20 @@ fn draw_on<DB: DrawingBackend>(
 
     // The image, one field pixel per k × k screen pixels.
     let (xa, ya) = opts.view.axes();
+    // Lengths in cm with physical units: the chart's coordinates are cgs, so that its ticks
+    // fall on round values in cm.
+    let (length, length_unit) = match &opts.units {
+        Some(u) => (u.length_cgs, "cm"),
+        None => (1.0, "code units"),
+    };
     let mut chart = ChartBuilder::on(&left)
         .margin(MARGIN)
         .x_label_area_size(X_LABEL_AREA)
         .y_label_area_size(Y_LABEL_AREA)
-        .build_cartesian_2d(frame.x.0..frame.x.1, frame.y.0..frame.y.1)
+        .build_cartesian_2d(
+            frame.x.0 * length..frame.x.1 * length,
+            frame.y.0 * length..frame.y.1 * length,
+        )
         .map_err(|e| err(&e))?;
     let (px, py) = chart.plotting_area().get_pixel_range();
     let (w, h) = ((px.end - px.start) as usize, (py.end - py.start) as usize);
@@ -433,16 +442,8 @@ fn draw_on<DB: DrawingBackend>(
     let bitmap = BitMapElement::with_owned_buffer((px.start, py.start), (w as u32, h as u32), buf)
         .ok_or_else(|| anyhow!("image buffer does not match the plot area"))?;
     root.draw(&bitmap).map_err(|e| err(&e))?;
-    // Lengths in cm with physical units: the ticks stay at the code values' places and
-    // say what they are in cgs.
-    let (length, length_unit) = match &opts.units {
-        Some(u) => (u.length_cgs, "cm"),
-        None => (1.0, "code units"),
-    };
-    let x_ticks = ticks_for(length * (frame.x.1 - frame.x.0));
-    let y_ticks = ticks_for(length * (frame.y.1 - frame.y.0));
-    let x_label = |v: &f64| x_ticks(&(v * length));
-    let y_label = |v: &f64| y_ticks(&(v * length));
+    let x_label = ticks_for(length * (frame.x.1 - frame.x.0));
+    let y_label = ticks_for(length * (frame.y.1 - frame.y.0));
     chart
         .configure_mesh()
         .disable_mesh()
@@ -468,7 +469,10 @@ fn draw_on<DB: DrawingBackend>(
             snap.point_masses
                 .iter()
                 .filter(|pm| inside(&pm.pos))
-                .map(|pm| Circle::new((pm.pos[ia], pm.pos[ib]), 5, WHITE.stroke_width(2))),
+                .map(|pm| {
+                    let at = (pm.pos[ia] * length, pm.pos[ib] * length);
+                    Circle::new(at, 5, WHITE.stroke_width(2))
+                }),
         )
         .map_err(|e| err(&e))?;
 
@@ -484,13 +488,24 @@ fn draw_on<DB: DrawingBackend>(
 
     // The colour bar, level with the image.
     let (a_lo, a_hi) = (range.axis_value(range.lo), range.axis_value(range.hi));
+    // With physical units the bar's values are cgs: × the factor, or + its log10; the
+    // bar's coordinates are cgs, so that its ticks fall on round values.
+    let (factor, unit) = match &opts.units {
+        Some(u) => opts.quantity.cgs(snap.dimension, u),
+        None => (1.0, opts.quantity.unit(snap.dimension).to_string()),
+    };
+    let to_cgs = |v: f64| match range.scale {
+        Scale::Log => v + factor.log10(),
+        Scale::Linear => v * factor,
+    };
+    let (c_lo, c_hi) = (to_cgs(a_lo), to_cgs(a_hi));
     let mut bar = ChartBuilder::on(&right)
         .margin_top(MARGIN)
         .margin_bottom(MARGIN + X_LABEL_AREA)
         .margin_left(BAR_GAP)
         .margin_right(MARGIN)
         .right_y_label_area_size(BAR_LABEL_AREA)
-        .build_cartesian_2d(0.0..1.0, a_lo..a_hi)
+        .build_cartesian_2d(0.0..1.0, c_lo..c_hi)
         .map_err(|e| err(&e))?;
     let (bx, by) = bar.plotting_area().get_pixel_range();
     let (bw, bh) = ((bx.end - bx.start) as usize, (by.end - by.start) as usize);
@@ -510,18 +525,8 @@ fn draw_on<DB: DrawingBackend>(
     } else {
         ""
     };
-    // With physical units the bar's values are cgs: × the factor, or + its log10.
-    let (factor, unit) = match &opts.units {
-        Some(u) => opts.quantity.cgs(snap.dimension, u),
-        None => (1.0, opts.quantity.unit(snap.dimension).to_string()),
-    };
-    let to_cgs = |v: f64| match range.scale {
-        Scale::Log => v + factor.log10(),
-        Scale::Linear => v * factor,
-    };
     let label = quantity_label(opts);
-    let bar_ticks = ticks_for(to_cgs(a_hi) - to_cgs(a_lo));
-    let bar_label = |v: &f64| bar_ticks(&to_cgs(*v));
+    let bar_label = ticks_for(c_hi - c_lo);
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
