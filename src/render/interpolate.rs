@@ -1044,14 +1044,23 @@ mod tests {
             let support = kind.support_factor();
             // The quadrature itself, before the table is renormalised.
             let (_, raw) = integrate_column_kernel(kind);
-            eprintln!("{kind:?}: column kernel quadrature ∫ F d²R − 1 = {:.2e}", raw - 1.0);
+            eprintln!(
+                "{kind:?}: column kernel quadrature ∫ F d²R − 1 = {:.2e}",
+                raw - 1.0
+            );
             assert!((raw - 1.0).abs() < 1e-4, "{kind:?}: {raw}");
             // F(0) = ∫ W₃(|z|) dz = 2 ∫₀^support W₃(s) ds; F(support · h) = 0.
             let unit = Kernel::<3>::of_kind(kind, 1.0);
             let n = 200_000;
             let ds = support / n as f64;
-            let f0: f64 = 2.0 * (0..n).map(|i| unit.w((i as f64 + 0.5) * ds) * ds).sum::<f64>();
-            assert!((column_kernel(kind, 0.0, 1.0) / f0 - 1.0).abs() < 1e-4, "{kind:?}");
+            let f0: f64 = 2.0
+                * (0..n)
+                    .map(|i| unit.w((i as f64 + 0.5) * ds) * ds)
+                    .sum::<f64>();
+            assert!(
+                (column_kernel(kind, 0.0, 1.0) / f0 - 1.0).abs() < 1e-4,
+                "{kind:?}"
+            );
             assert_eq!(column_kernel(kind, support, 1.0), 0.0);
             assert!(
                 (column_kernel(kind, 0.0, 0.5) / (4.0 * f0) - 1.0).abs() < 1e-4,

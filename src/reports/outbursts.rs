@@ -698,7 +698,11 @@ mod tests {
             }
         }
         let f = analyse(&light, &monitor, &modes, (0.0631209, "test".into())).unwrap();
-        assert!((f.eccentricity_bar - 0.06).abs() < 1e-9, "{}", f.eccentricity_bar);
+        assert!(
+            (f.eccentricity_bar - 0.06).abs() < 1e-9,
+            "{}",
+            f.eccentricity_bar
+        );
         assert_eq!((f.normal_outbursts, f.superoutbursts), (2, 1), "{f:#?}");
         assert!(f.outbursts[..2].iter().all(|o| o.eccentricity_max > 0.039));
     }
