@@ -288,9 +288,12 @@ impl Extent {
 /// `snap` with the periodic images of its particles that lie within one kernel support of
 /// the box's faces across the view's two axes (and the corners), so that a periodic box's
 /// picture has no dark bands at its borders: a particle near x = lo reappears at x + L,
-/// where its kernel reaches into the picture from the other side.
+/// where its kernel reaches into the picture from the other side. A 3D slice also takes
+/// the images across the line of sight (a slice near z = lo cuts the kernels of particles
+/// near z = hi); a projection does not (the column would count them twice).
 pub fn with_periodic_images(snap: &Snapshot, view: View) -> Snapshot {
     let (a, b) = view.axis_indices();
+    let c = (view == View::Slice && snap.dimension == 3).then_some(3 - a - b);
     let mut out = snap.clone();
     let shifts = |d: usize, x: f64, reach: f64| -> Vec<f64> {
         let (lo, hi) = (snap.box_lo[d], snap.box_hi[d]);
@@ -309,29 +312,34 @@ pub fn with_periodic_images(snap: &Snapshot, view: View) -> Snapshot {
     };
     for i in 0..snap.len() {
         let reach = snap.kernel.support_factor() * snap.h[i];
+        let across = c.map_or(vec![0.0], |c| shifts(c, snap.pos[c][i], reach));
         for &sa in &shifts(a, snap.pos[a][i], reach) {
             for &sb in &shifts(b, snap.pos[b][i], reach) {
-                if sa == 0.0 && sb == 0.0 {
-                    continue;
+                for &sc in &across {
+                    if sa == 0.0 && sb == 0.0 && sc == 0.0 {
+                        continue;
+                    }
+                    for d in 0..3 {
+                        let shift = if d == a {
+                            sa
+                        } else if d == b {
+                            sb
+                        } else if Some(d) == c {
+                            sc
+                        } else {
+                            0.0
+                        };
+                        out.pos[d].push(snap.pos[d][i] + shift);
+                        out.vel[d].push(snap.vel[d][i]);
+                    }
+                    out.id.push(snap.id[i]);
+                    out.mass.push(snap.mass[i]);
+                    out.h.push(snap.h[i]);
+                    out.rho.push(snap.rho[i]);
+                    out.u.push(snap.u[i]);
+                    out.p.push(snap.p[i]);
+                    out.diss.push(snap.diss[i]);
                 }
-                for d in 0..3 {
-                    let shift = if d == a {
-                        sa
-                    } else if d == b {
-                        sb
-                    } else {
-                        0.0
-                    };
-                    out.pos[d].push(snap.pos[d][i] + shift);
-                    out.vel[d].push(snap.vel[d][i]);
-                }
-                out.id.push(snap.id[i]);
-                out.mass.push(snap.mass[i]);
-                out.h.push(snap.h[i]);
-                out.rho.push(snap.rho[i]);
-                out.u.push(snap.u[i]);
-                out.p.push(snap.p[i]);
-                out.diss.push(snap.diss[i]);
             }
         }
     }
@@ -1412,5 +1420,34 @@ mod tests {
         };
         assert!(spread(&plain) > 0.3, "{}", spread(&plain));
         assert!(spread(&full) < 0.02, "{}", spread(&full));
+    }
+
+    #[test]
+    fn a_slice_near_a_face_takes_the_images_across_the_line_of_sight() {
+        // The same lattice, 8 layers deep: a slice 0.05 above the bottom face cuts the
+        // kernels of the top layers' images (z − 8), a projection must not count them.
+        let snap = lattice(12, 12, 8, 1.2);
+        let frame = Frame::new(Extent::new((3.0, 9.0), (3.0, 9.0)).unwrap(), 12, 12);
+        let slice = |s: &Snapshot, z: f64| {
+            let f = interpolate(s, Quantity::Density, View::Slice, &frame, Some(z)).unwrap();
+            f.iter().sum::<f64>() / f.len() as f64
+        };
+        let imaged = with_periodic_images(&snap, View::Slice);
+        // The middle of the box (no face within reach) is the reference density, ≈ 1.
+        let mid = slice(&snap, 4.0);
+        assert!((mid - 1.0).abs() < 0.02, "{mid}");
+        // Near the face: the images restore it; without them a third of it is missing.
+        let near_plain = slice(&snap, 0.05);
+        let near_imaged = slice(&imaged, 0.05);
+        assert!(near_plain < 0.8 * mid, "{near_plain} vs {mid}");
+        assert!(
+            (near_imaged / mid - 1.0).abs() < 0.02,
+            "{near_imaged} vs {mid}"
+        );
+        // A face-on projection takes no images along z.
+        let projected = with_periodic_images(&snap, View::FaceOn);
+        for i in snap.len()..projected.len() {
+            assert!((0.0..8.0).contains(&projected.pos[2][i]));
+        }
     }
 }
