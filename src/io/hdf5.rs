@@ -653,13 +653,11 @@ pub fn read_parameters(path: &Path) -> Result<BTreeMap<String, String>> {
     Ok(attrs
         .iter()
         .filter_map(|(k, v)| {
-            let text = match v {
-                AttrValue::AsciiString(s) | AttrValue::String(s) => s.clone(),
-                AttrValue::AsciiStringSized { value, .. }
-                | AttrValue::StringSized { value, .. } => value.clone(),
-                other => attr_f64(&HashMap::from([(k.clone(), other.clone())]), k)?.to_string(),
+            let text = match attr_text(v) {
+                Some(t) => t,
+                None => attr_f64(&HashMap::from([(k.clone(), v.clone())]), k)?.to_string(),
             };
-            Some((k.clone(), text.trim_end_matches('\0').trim().to_string()))
+            Some((k.clone(), text))
         })
         .collect())
 }
@@ -875,20 +873,24 @@ fn read_one(path: &Path) -> Result<Part> {
     Ok(Part::Data(Box::new(snap), num_files, this_file))
 }
 
+/// A string attribute's text, without trailing NULs and blanks; None for other types.
+fn attr_text(v: &AttrValue) -> Option<String> {
+    match v {
+        AttrValue::AsciiString(s) | AttrValue::String(s) => Some(s),
+        AttrValue::AsciiStringSized { value, .. } | AttrValue::StringSized { value, .. } => {
+            Some(value)
+        }
+        _ => None,
+    }
+    .map(|s| s.trim_end_matches('\0').trim().to_string())
+}
+
 /// The run's kernel: `/HydroScheme` `Kernel function` (the description written from
 /// [`Snapshot::kernel`]), else `/Parameters` `particles:kernel`, else the cubic spline
 /// (files of other codes that name none).
 fn read_kernel(file: &File) -> KernelKind {
     let text = |group: &str, key: &str| -> Option<String> {
-        let attrs = file.group(group).ok()?.attrs().ok()?;
-        match attrs.get(key)? {
-            AttrValue::AsciiString(s) | AttrValue::String(s) => Some(s.clone()),
-            AttrValue::AsciiStringSized { value, .. } | AttrValue::StringSized { value, .. } => {
-                Some(value.clone())
-            }
-            _ => None,
-        }
-        .map(|s| s.trim_end_matches('\0').trim().to_string())
+        attr_text(file.group(group).ok()?.attrs().ok()?.get(key)?)
     };
     text("HydroScheme", "Kernel function")
         .and_then(|d| KernelKind::ALL.into_iter().find(|k| k.description() == d))
