@@ -7,10 +7,12 @@
 //! 2. drift: x ← x + v Δt (then wrap or reflect at the box);
 //! 3. predict v and u at the end of the step (v + a Δt/2) for the velocity-dependent terms;
 //! 4. evaluate: one sweep gives the new a and du/dt, plus external gravity;
-//! 5. kick:  v ← v_half + a Δt/2, u ← u_half + (du/dt) Δt/2.
+//! 5. kick:  v ← v_half + a Δt/2, u ← u_half + (du/dt) Δt/2;
+//! 6. with the artificial-viscosity switch, each particle's α over Δt (`physics::av_switch`).
 
 use crate::boundary::SimBox;
 use crate::particles::Particles;
+use crate::physics::av_switch::{AvSwitch, SwitchKind};
 use crate::physics::eos::cylindrical_radius;
 use crate::sweep::{Physics, SweepStats, Window, evaluate};
 
@@ -184,8 +186,18 @@ pub fn kdk_step_with<const D: usize>(
     bx.enforce(&mut p.pos, &mut v_half);
     // Predict with the old accelerations, evaluate, correct with the new ones.
     half_kick(p, &v_half, &u_half, half, evolve_u);
+    let switch = phys.av.switch();
+    // Cullen & Dehnen's trigger needs ∇·v before the evaluation too.
+    let div_old = match switch {
+        Some(sw) if sw.kind == SwitchKind::CullenDehnen => AvSwitch::divergence(p),
+        _ => Vec::new(),
+    };
     let stats = rhs(p);
     half_kick(p, &v_half, &u_half, half, evolve_u);
+    if let Some(sw) = switch {
+        // α_i over the step, with this evaluation's ∇·v (physics::av_switch).
+        sw.advance_all(p, &div_old, phys.kernel.h(), dt);
+    }
     if let Some(b) = &phys.binary {
         b.add_frame_velocity(&p.pos, &mut p.vel, -1.0);
     }

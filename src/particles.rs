@@ -16,6 +16,9 @@ pub struct Particles<const D: usize> {
     pub mass: Vec<f64>,
     /// Specific internal energy e_i.
     pub u: Vec<f64>,
+    /// The particle's own artificial-viscosity coefficient α_i, integrated in time with the
+    /// Morris–Monaghan switch (`physics::av_switch`); unused with a constant α.
+    pub alpha: Vec<f64>,
     /// Density by summation, Eq. (5).
     pub rho: Vec<f64>,
     pub p: Vec<f64>,
@@ -55,6 +58,7 @@ impl<const D: usize> Particles<D> {
             vel: vecs(),
             mass: Vec::new(),
             u: Vec::new(),
+            alpha: Vec::new(),
             rho: Vec::new(),
             p: Vec::new(),
             cs: Vec::new(),
@@ -90,7 +94,9 @@ impl<const D: usize> Particles<D> {
         self.mass.is_empty()
     }
 
-    /// Appends a particle; derived quantities start at zero.
+    /// Appends a particle; derived quantities start at zero, and so does α (a switch
+    /// raises it to α_min at the particle's first step; a run's set-up starts every
+    /// particle at α_max).
     pub fn push(&mut self, id: u64, pos: [f64; D], vel: [f64; D], mass: f64, u: f64) {
         self.id.push(id);
         for d in 0..D {
@@ -103,6 +109,7 @@ impl<const D: usize> Particles<D> {
         }
         self.mass.push(mass);
         self.u.push(u);
+        self.alpha.push(0.0);
         for v in self.derived_scalars_mut() {
             v.push(0.0);
         }
@@ -180,6 +187,7 @@ impl<const D: usize> Particles<D> {
         let scalars = [
             ("mass", &mut self.mass),
             ("u", &mut self.u),
+            ("alpha", &mut self.alpha),
             ("rho", &mut self.rho),
             ("p", &mut self.p),
             ("cs", &mut self.cs),
@@ -193,7 +201,7 @@ impl<const D: usize> Particles<D> {
     }
 
     /// Number of values [`Particles::state_of`] writes per particle.
-    pub const STATE_LEN: usize = 2 + 3 * D + D * D + 9;
+    pub const STATE_LEN: usize = 2 + 3 * D + D * D + 10;
 
     /// Appends particle `i`'s whole state to `out`: id (as bits), interactions, then every
     /// array in [`Particles::named_arrays_mut`] order. For moving particles between ranks.
@@ -209,6 +217,7 @@ impl<const D: usize> Particles<D> {
         out.extend([
             self.mass[i],
             self.u[i],
+            self.alpha[i],
             self.rho[i],
             self.p[i],
             self.cs[i],
@@ -242,6 +251,7 @@ impl<const D: usize> Particles<D> {
         }
         retain_by(&mut self.mass, keep);
         retain_by(&mut self.u, keep);
+        retain_by(&mut self.alpha, keep);
         for v in self.derived_scalars_mut() {
             retain_by(v, keep);
         }

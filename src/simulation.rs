@@ -728,6 +728,10 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<(Run<D
             (state.particles, h, t0)
         }
     };
+    let mut particles = particles;
+    if let Some(sw) = cfg.artificial_viscosity.switch() {
+        sw.initialise(&mut particles);
+    }
     let problem_times = output_times.clone();
     let (t_end, mut out_times) = snapshot_times(cfg, problem_t_end, output_times)?;
     if t0 > 0.0 {

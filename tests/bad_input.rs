@@ -163,6 +163,55 @@ fn negative_or_zero_mass_is_refused() {
     assert_fails(d.path(), &["run", &f], &["particle 7", "mass"]);
 }
 
+/// The artificial-viscosity switch: an unknown name, α_min above α (= α_max), a decay
+/// constant of 0, a switch without an α to switch, and a switch's setting without a
+/// switch — each one line naming the key.
+#[test]
+fn switch_settings_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    let sod = problem("sod.toml");
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["artificial_viscosity.switch=\"balsara\""],
+            "artificial_viscosity.switch",
+        ),
+        (
+            &[
+                "artificial_viscosity.switch=\"cullen_dehnen\"",
+                "artificial_viscosity.alpha_min=2",
+            ],
+            "artificial_viscosity.alpha_min",
+        ),
+        (
+            &[
+                "artificial_viscosity.switch=\"morris_monaghan\"",
+                "artificial_viscosity.switch_decay=0",
+            ],
+            "artificial_viscosity.switch_decay",
+        ),
+        (
+            &[
+                "artificial_viscosity.switch=\"morris_monaghan\"",
+                "artificial_viscosity.alpha=0",
+            ],
+            "artificial_viscosity.alpha",
+        ),
+    ];
+    for (sets, key) in cases {
+        let mut args = vec!["check", sod.as_str()];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        assert_fails(d.path(), &args, &[key]);
+    }
+    // Without a switch its settings have nothing to act on.
+    assert_fails(
+        d.path(),
+        &["check", &sod, "--set", "artificial_viscosity.alpha_min=0.5"],
+        &["artificial_viscosity.alpha_min", "switch"],
+    );
+}
+
 #[test]
 fn unknown_kernel_shock_tube_window_sedov_deposit_and_conductivity_are_named() {
     let d = tempfile::tempdir().unwrap();

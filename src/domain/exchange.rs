@@ -227,7 +227,7 @@ impl<const D: usize> RankExchange<'_, D> {
                 } else {
                     buf.extend(l.vgrad[o].iter().flatten());
                     buf.extend(l.stress[o].iter().flatten());
-                    buf.extend([l.nu[o], l.balsara[o]]);
+                    buf.extend([l.nu[o], l.av_scale[o]]);
                 }
             }
             self.send(q, tag::FINALS + k as u16, buf);
@@ -257,7 +257,7 @@ impl<const D: usize> RankExchange<'_, D> {
                     }
                 }
                 l.nu[c] = x[2 * D * D];
-                l.balsara[c] = x[2 * D * D + 1];
+                l.av_scale[c] = x[2 * D * D + 1];
             }
         }
         self.finals_in[k as usize][q] = true;
@@ -499,6 +499,7 @@ pub fn evaluate<const D: usize>(
     };
     let grid = Grid::new(&open, support, &elems.pos);
     let mut local = Local::from_elements(elems, grid);
+    local.set_alpha_factors(&parts.alpha, &phys.av);
 
     let mut local_of_elem = vec![0u32; local.len()];
     for (k, &e) in local.element.iter().enumerate() {
@@ -642,6 +643,9 @@ mod tests {
                 1.0 + 0.5 * rng.uniform(),
                 1.0 + rng.uniform(),
             );
+            // Each particle's own α for the switch (another rank's reach it with the
+            // gradient stage's exchange).
+            p.alpha[k] = 0.1 + 0.9 * rng.uniform();
         }
         p
     }
@@ -725,6 +729,7 @@ mod tests {
                 alpha: 1.0,
                 beta: 2.0,
                 balsara: true,
+                switch: crate::physics::av_switch::SwitchKind::MorrisMonaghan,
                 ..ArtificialViscosity::default()
             },
             viscosity: ViscosityModel {

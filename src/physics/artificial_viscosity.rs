@@ -1,9 +1,12 @@
 //! Artificial viscosity for shocks: Monaghan's (1997) signal-velocity form, with an optional
 //! Balsara (1995) switch, and optionally acting on the velocity relative to circular orbits
 //! about the central mass (for disks). Off (α = β = 0) by default; shock problems turn it on.
-//! Also the artificial conductivity of the energy equation (Price 2008), off by default.
+//! Also the artificial conductivity of the energy equation (Price 2008), off by default, and
+//! the choice of a per-particle α (the Morris & Monaghan switch, `physics::av_switch`).
 
 use serde::{Deserialize, Serialize};
+
+use crate::physics::av_switch::{AvSwitch, SwitchKind};
 
 /// Π_ij = −α v_sig w_ij / (ρ_i + ρ_j) for approaching pairs (w_ij = v_ij·r̂_ij < 0), with
 /// v_sig = c_i + c_j − β w_ij; zero for receding pairs. (This is Monaghan's −(α/2) v_sig w / ρ̄.)
@@ -35,12 +38,28 @@ pub struct ArtificialViscosity {
     /// removes the pressure blip. 0 (off) by default; ignored for gas without an energy
     /// equation.
     pub conductivity: f64,
+    /// "none" (a constant α, the default), "morris_monaghan" or "cullen_dehnen": each
+    /// particle's own α_i, raised by compression (Morris & Monaghan) or by compression
+    /// setting in (Cullen & Dehnen) towards `alpha` (then α_max), and decaying to
+    /// `alpha_min` elsewhere (`physics::av_switch`).
+    pub switch: SwitchKind,
+    /// The switch's floor α_min (default 0.1, Morris & Monaghan's value; only with a
+    /// switch).
+    pub alpha_min: Option<f64>,
+    /// The switch's decay constant ℓ: α_i − α_min decays on τ = h / (ℓ c_s) (default 0.1;
+    /// only with a switch).
+    pub switch_decay: Option<f64>,
 }
 
 /// The largest α, β or α_u accepted. Shock problems use α ≈ 1, β ≈ 2 (switches go up to
 /// α ≈ 2–3); a hundred times that leaves only time steps too short to run (and at ~10¹⁸ the
 /// forces overflow to infinity).
 pub const MAX_COEFFICIENT: f64 = 100.0;
+
+/// α_min of a switch unless set (Morris & Monaghan 1997).
+pub const DEFAULT_ALPHA_MIN: f64 = 0.1;
+/// ℓ of a switch's decay time h/(ℓ c_s) unless set (Phantom's `avdecayconst`).
+pub const DEFAULT_SWITCH_DECAY: f64 = 0.1;
 
 impl Default for ArtificialViscosity {
     fn default() -> Self {
@@ -50,6 +69,9 @@ impl Default for ArtificialViscosity {
             balsara: false,
             orbital: false,
             conductivity: 0.0,
+            switch: SwitchKind::None,
+            alpha_min: None,
+            switch_decay: None,
         }
     }
 }
@@ -63,6 +85,9 @@ impl ArtificialViscosity {
             balsara: false,
             orbital: false,
             conductivity: 0.0,
+            switch: SwitchKind::None,
+            alpha_min: None,
+            switch_decay: None,
         }
     }
 
@@ -79,11 +104,70 @@ impl ArtificialViscosity {
                 ));
             }
         }
+        if self.switch == SwitchKind::None {
+            for (key, v) in [
+                ("alpha_min", self.alpha_min),
+                ("switch_decay", self.switch_decay),
+            ] {
+                if v.is_some() {
+                    return Err(format!(
+                        "artificial_viscosity.{key} must go with a switch: set artificial_viscosity.switch (morris_monaghan or cullen_dehnen) or remove it"
+                    ));
+                }
+            }
+        } else {
+            if !(self.alpha > 0.0) {
+                return Err(format!(
+                    "artificial_viscosity.alpha must be > 0 with a switch (it is α_max), got {:?}",
+                    self.alpha
+                ));
+            }
+            let alpha_min = self.alpha_min.unwrap_or(DEFAULT_ALPHA_MIN);
+            if !((0.0..=self.alpha).contains(&alpha_min)) {
+                return Err(format!(
+                    "artificial_viscosity.alpha_min must lie between 0 and alpha = {}, got {alpha_min:?}",
+                    self.alpha
+                ));
+            }
+            // ℓ sets τ = h/(ℓ c_s): ℓ ≳ 10 would follow the gas faster than a time step
+            // resolves; ℓ = 0 would never decay.
+            let decay = self.switch_decay.unwrap_or(DEFAULT_SWITCH_DECAY);
+            if !(decay > 0.0 && decay <= 10.0) {
+                return Err(format!(
+                    "artificial_viscosity.switch_decay must lie in (0, 10], got {decay:?}"
+                ));
+            }
+        }
         Ok(())
     }
 
+    /// The per-particle switch, when one is chosen.
+    pub fn switch(&self) -> Option<AvSwitch> {
+        match self.switch {
+            SwitchKind::None => None,
+            kind => Some(AvSwitch {
+                kind,
+                alpha_max: self.alpha,
+                alpha_min: self.alpha_min.unwrap_or(DEFAULT_ALPHA_MIN),
+                decay: self.switch_decay.unwrap_or(DEFAULT_SWITCH_DECAY),
+            }),
+        }
+    }
+
+    /// A particle's factor on the pair's α from its own α_i: α_i/α_max with the switch (so
+    /// that α_max × the pair's mean factor is ½ (α_i + α_j)), 1 with a constant α.
+    #[inline]
+    pub fn alpha_factor(&self, alpha_i: f64) -> f64 {
+        if self.switch == SwitchKind::None || !(self.alpha > 0.0) {
+            1.0
+        } else {
+            alpha_i / self.alpha
+        }
+    }
+
     /// (Π_ij, v_sig,ij) for a pair with v_ij·r_ij = `vdotr` at separation `r`.
-    /// `balsara` is the pair's mean switch factor (1 without the switch).
+    /// `scale` is the pair's mean of the particles' factors on α: Balsara's factor times
+    /// α_i/α_max with the switch (1 with neither), so that α_ij = ½ (α_i + α_j).
     #[inline]
     pub fn pi(
         &self,
@@ -91,7 +175,7 @@ impl ArtificialViscosity {
         r: f64,
         (ci, cj): (f64, f64),
         (rhoi, rhoj): (f64, f64),
-        balsara: f64,
+        scale: f64,
     ) -> (f64, f64) {
         let w = if r > 0.0 { vdotr / r } else { 0.0 };
         let approach = w.min(0.0);
@@ -99,7 +183,7 @@ impl ArtificialViscosity {
         if approach < 0.0 && self.alpha > 0.0 {
             let vsig_av = ci + cj - self.beta * approach;
             (
-                -self.alpha * vsig_av * approach / (rhoi + rhoj) * balsara,
+                -self.alpha * vsig_av * approach / (rhoi + rhoj) * scale,
                 vsig,
             )
         } else {

@@ -39,8 +39,9 @@ pub struct ForceSide<const D: usize> {
     pub rho: f64,
     pub p: f64,
     pub cs: f64,
-    /// Balsara factor (1 without the switch).
-    pub balsara: f64,
+    /// The particle's factor on α: Balsara's factor times α_i/α_max with the
+    /// Morris–Monaghan switch (1 with neither).
+    pub av_scale: f64,
     /// Viscous stress S = ν σ (Eq. 9, plus bulk part); zero without physical viscosity.
     pub stress: [[f64; D]; D],
     /// Specific internal energy (for the artificial conductivity).
@@ -111,7 +112,7 @@ pub fn force_pair<const D: usize>(
         r,
         (i.cs, j.cs),
         (i.rho, j.rho),
-        0.5 * (i.balsara + j.balsara),
+        0.5 * (i.av_scale + j.av_scale),
     );
     let coef = -(pterm + pi) * f;
     let gv = f * vdotr / (i.rho * j.rho);
@@ -163,7 +164,7 @@ mod tests {
             rho,
             p,
             cs: 1.0,
-            balsara: 1.0,
+            av_scale: 1.0,
             stress,
             u: 1.5 * p / rho,
         }

@@ -3,6 +3,7 @@
 //! and the fixed set of pair functions the sweep calls (`hydro`).
 
 pub mod artificial_viscosity;
+pub mod av_switch;
 pub mod binary;
 pub mod cooling;
 pub mod eos;

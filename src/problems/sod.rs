@@ -44,6 +44,29 @@ pub(crate) fn solution(cfg: &Config) -> Result<RiemannSolution> {
     })
 }
 
+/// The left state's lattice: its spacing x0/n and its count across the tube.
+fn left_lattice(cfg: &Config) -> (f64, usize) {
+    let s = params(cfg);
+    let dx = s.x0 / cfg.particles.n.unwrap_or(0) as f64;
+    (dx, ((s.width / dx).round() as usize).max(1))
+}
+
+/// Where the gas that started left of the diaphragm ends: the particles sorted by x, the
+/// point half-way between the last one within the first `n_left` (the left state's
+/// count: equal masses) and the next. SPH particles move with the gas, and at a contact
+/// no gas crosses, so this is the contact's position in mass, immune to how the density
+/// is smoothed or binned (a conductivity that smooths u moves it only by moving gas).
+pub fn mass_interface<const D: usize>(p: &Particles<D>, n_left: usize) -> Option<f64> {
+    if n_left == 0 || n_left >= p.len() {
+        return None;
+    }
+    let mut x = p.pos[0].clone();
+    let (lo, pivot, _) = x.select_nth_unstable_by(n_left, f64::total_cmp);
+    let right = *pivot;
+    let left = lo.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    Some(0.5 * (left + right))
+}
+
 pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let s = params(cfg);
     // Refuse states the exact solver cannot handle before building anything.
@@ -62,9 +85,8 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let n = cfg.particles.n.unwrap_or(0);
     let (l, r) = (s.left, s.right);
     // Left lattice: cubic, spacing dx.
-    let dx = s.x0 / n as f64;
+    let (dx, n_cross_l) = left_lattice(cfg);
     let mass = l.rho * dx.powi(D as i32);
-    let n_cross_l = ((s.width / dx).round() as usize).max(1);
     let width = n_cross_l as f64 * dx;
     // Right lattice: cross-section spacing close to the ideal (m/ρ_R)^(1/D), dividing the
     // width exactly; x-spacing so that the particle mass is the same.
@@ -246,7 +268,8 @@ pub fn measure_fronts(
 /// `contact_position`, each with its exact value and its distance from it in particle
 /// spacings (`*_offset_spacings`): at a shock the post-shock spacing, at the contact the
 /// sparser side's. At the contact also `contact_pressure_blip`: the largest |p − p*| / p*
-/// within its window.
+/// within its window, and `contact_mass_position` ([`mass_interface`]: where the left
+/// gas ends) with `contact_mass_offset_spacings`.
 pub fn errors<const D: usize>(
     cfg: &Config,
     p: &Particles<D>,
@@ -292,6 +315,16 @@ pub fn errors<const D: usize>(
         .into_iter()
         .find(|f| f.name == "contact")
     {
+        let (_, n_cross) = left_lattice(cfg);
+        let n_left = cfg.particles.n.unwrap_or(0) * n_cross.pow(D as u32 - 1);
+        if let Some(x) = mass_interface(p, n_left) {
+            let spacing = (mass / f.rho_left.min(f.rho_right)).powf(1.0 / D as f64);
+            e.insert("contact_mass_position".into(), x);
+            e.insert(
+                "contact_mass_offset_spacings".into(),
+                (x - f.exact).abs() / spacing,
+            );
+        }
         let ps = sol.p_star();
         let blip = (0..p.len())
             .filter(|&i| (f.lo..=f.hi).contains(&p.pos[0][i]))
@@ -439,6 +472,39 @@ mod tests {
         // Two rarefactions (the 123 problem): nothing to measure.
         let fans = riemann((1.0, -2.0, 0.4), (1.0, 2.0, 0.4));
         assert!(fronts(&fans, 0.5, 1.0, 0.15).is_empty());
+    }
+
+    /// The mass interface is the left gas's edge, whatever the order of the store and
+    /// however the density is smoothed: on the set-up it lies between the lattices; move
+    /// the left gas and it moves with it.
+    #[test]
+    fn the_mass_interface_follows_the_left_gas() {
+        let mut s = set_up(200, &[]).unwrap().particles;
+        let n_left = 200;
+        let edge = |p: &Particles<1>| {
+            let l = (0..n_left).map(|i| p.pos[0][i]).fold(f64::MIN, f64::max);
+            let r = (n_left..p.len())
+                .map(|i| p.pos[0][i])
+                .fold(f64::MAX, f64::min);
+            0.5 * (l + r)
+        };
+        let x = mass_interface(&s, n_left).unwrap();
+        assert_eq!(x, edge(&s));
+        assert!((x - 0.5).abs() < 0.01, "{x}");
+        // Compress the right gas towards the wall and push the left gas 0.03 after it.
+        for i in 0..s.len() {
+            let x = &mut s.pos[0][i];
+            *x = if i < n_left {
+                *x + 0.03
+            } else {
+                0.53 + (*x - 0.5) * 0.9
+            };
+        }
+        s.pos[0].reverse();
+        let moved = mass_interface(&s, n_left).unwrap();
+        assert!((moved - x - 0.03).abs() < 0.01, "{moved} {x}");
+        assert_eq!(mass_interface(&s, 0), None);
+        assert_eq!(mass_interface(&s, s.len()), None);
     }
 
     #[test]

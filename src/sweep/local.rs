@@ -4,6 +4,7 @@
 use crate::boundary::{Ghost, SimBox, make_ghosts};
 use crate::grid::{CellIndex, Grid};
 use crate::particles::{Particles, retain_by};
+use crate::physics::artificial_viscosity::ArtificialViscosity;
 
 /// Per-particle accumulators of the three sums. Kept apart from [`Local`] so that the sums can
 /// write them in parallel while reading the particles' state.
@@ -209,7 +210,10 @@ pub struct Local<const D: usize> {
     pub rho: Vec<f64>,
     pub p: Vec<f64>,
     pub cs: Vec<f64>,
-    pub balsara: Vec<f64>,
+    /// Each particle's factor on the artificial viscosity's α: α_i/α_max from the
+    /// particle's own α with the Morris–Monaghan switch (set at build), times Balsara's
+    /// factor once the gradient is known; 1 with neither.
+    pub av_scale: Vec<f64>,
     pub vgrad: Vec<[[f64; D]; D]>,
     /// Kinematic viscosity and viscous stress S = ν σ (Eq. 9), set after the gradient sum.
     pub nu: Vec<f64>,
@@ -267,7 +271,7 @@ impl<const D: usize> Local<D> {
             rho: vec![0.0; total],
             p: vec![0.0; total],
             cs: vec![0.0; total],
-            balsara: vec![1.0; total],
+            av_scale: vec![1.0; total],
             vgrad: vec![[[0.0; D]; D]; total],
             nu: vec![0.0; total],
             stress: vec![[[0.0; D]; D]; total],
@@ -280,6 +284,20 @@ impl<const D: usize> Local<D> {
 
     pub fn is_empty(&self) -> bool {
         self.mass.is_empty()
+    }
+
+    /// With the Morris–Monaghan switch, each particle's factor α_i/α_max from the store's
+    /// `alpha` (reals and their images; another rank's particles get theirs with the
+    /// gradient stage's exchange).
+    pub fn set_alpha_factors(&mut self, alpha: &[f64], av: &ArtificialViscosity) {
+        if av.switch().is_none() {
+            return;
+        }
+        for (k, &s) in self.src.iter().enumerate() {
+            if s != REMOTE {
+                self.av_scale[k] = av.alpha_factor(alpha[s as usize]);
+            }
+        }
     }
 
     pub fn num_ghosts(&self) -> usize {

@@ -276,6 +276,7 @@ pub fn evaluate<const D: usize>(
 ) -> SweepStats {
     let clock = Instant::now();
     let mut local = Local::build(parts, bx, phys.kernel.support());
+    local.set_alpha_factors(&parts.alpha, &phys.av);
     let build = clock.elapsed().as_secs_f64();
     let (work, mut stats) = sweep(&mut local, phys, window, &mut NoExchange);
     stats.times.build += build;
@@ -475,7 +476,7 @@ fn finish_slab<const D: usize>(
             GRADIENT => {
                 local.vgrad[k] = work[k].grad;
                 if phys.av.balsara {
-                    local.balsara[k] = balsara_factor(&local.vgrad[k], local.cs[k], h);
+                    local.av_scale[k] *= balsara_factor(&local.vgrad[k], local.cs[k], h);
                 }
                 if phys.viscous() {
                     let nu = phys.nu(local.cs[k], cylindrical_radius(&local.position(k)));
@@ -503,7 +504,7 @@ fn finish_slab<const D: usize>(
                 local.vgrad[g] = flip(&local.vgrad[o]);
                 local.stress[g] = flip(&local.stress[o]);
                 local.nu[g] = local.nu[o];
-                local.balsara[g] = local.balsara[o];
+                local.av_scale[g] = local.av_scale[o];
             }
             _ => {}
         }

@@ -305,7 +305,7 @@ impl PairBlock {
             rho: local.rho[k],
             p: local.p[k],
             cs: local.cs[k],
-            balsara: local.balsara[k],
+            av_scale: local.av_scale[k],
             stress: local.stress[k],
             u: if conduct { local.u[k] } else { 0.0 },
         };

@@ -76,7 +76,11 @@ pub fn full_list_minimum_image<const D: usize>(
         parts.interactions[i] += 1;
         parts.interactions[j] += 1;
     }
-    let mut balsara = vec![1.0; n];
+    let mut av_scale: Vec<f64> = parts
+        .alpha
+        .iter()
+        .map(|&a| phys.av.alpha_factor(a))
+        .collect();
     for i in 0..n {
         let radius = cylindrical_radius(&parts.position(i));
         let (p, cs) = phys
@@ -109,10 +113,10 @@ pub fn full_list_minimum_image<const D: usize>(
         }
     }
     if phys.av.balsara {
-        for (i, b) in balsara.iter_mut().enumerate() {
+        for (i, b) in av_scale.iter_mut().enumerate() {
             let v: [[f64; D]; D] =
                 std::array::from_fn(|a| std::array::from_fn(|c| parts.vgrad[a][c][i]));
-            *b = balsara_factor(&v, parts.cs[i], phys.kernel.h());
+            *b *= balsara_factor(&v, parts.cs[i], phys.kernel.h());
         }
     }
     let stress: Vec<[[f64; D]; D]> = (0..n)
@@ -134,7 +138,7 @@ pub fn full_list_minimum_image<const D: usize>(
         rho: parts.rho[k],
         p: parts.p[k],
         cs: parts.cs[k],
-        balsara: balsara[k],
+        av_scale: av_scale[k],
         stress: stress[k],
         u: parts.u[k],
     };
