@@ -350,6 +350,10 @@ pub struct RingParams {
     pub output_tau: Vec<f64>,
     /// Particles are placed where Σ exceeds this fraction of its peak.
     pub cutoff: f64,
+    /// Spread of each particle's radius about its ring, as a fraction of the ring spacing
+    /// R0/n, in [0, 1]: uniform within ±½ of it (seeded by `particles.seed`). 0 keeps every
+    /// particle on its ring; 1 fills the radii between the rings.
+    pub radial_jitter: f64,
 }
 
 impl Default for RingParams {
@@ -361,6 +365,7 @@ impl Default for RingParams {
             tau_end: 0.128,
             output_tau: vec![0.032, 0.064, 0.128],
             cutoff: 1e-3,
+            radial_jitter: 0.0,
         }
     }
 }

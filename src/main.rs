@@ -402,8 +402,12 @@ fn real_main(cli: Cli) -> Result<()> {
             what: AnalyseCommand::Ring { run },
         } => {
             let report = sphdisk::reports::ring::analyse_ring(&run)?;
-            for (tau, l1) in &report.l1 {
-                println!("tau = {tau:.4}: L1 of the averaged Σ = {:.2}%", 100.0 * l1);
+            for ((tau, l1), (_, empty)) in report.l1.iter().zip(&report.empty_annuli) {
+                println!(
+                    "tau = {tau:.4}: L1 of the averaged Σ = {:.2}%, empty annuli = {:.1}%",
+                    100.0 * l1,
+                    100.0 * empty
+                );
             }
             for f in &report.files {
                 println!("wrote {}", f.display());

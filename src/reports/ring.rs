@@ -1,6 +1,7 @@
 //! `sphdisk analyse ring <run>`: the spreading ring's azimuthally averaged Σ(R) against the
 //! exact solution at each snapshot (paper, Figure 4c), the scatter of the particles' own Σ
-//! (Figure 4b), the L1 error, as CSV files and a PNG.
+//! (Figure 4b), the L1 error and the share of the ring's annuli left without particles, as
+//! CSV files and a PNG.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -12,13 +13,15 @@ use crate::io::atomic::write_atomic;
 use crate::io::hdf5::read_snapshot_with_h;
 use crate::io::snapshot_index::SnapshotIndex;
 use crate::io::summary::Summary;
-use crate::problems::ring::{exact, ring_l1, tau_at};
+use crate::problems::ring::{exact, ring_empty_annuli, ring_l1, tau_at};
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
 
-/// What the analysis wrote, and the L1 error at each τ.
+/// What the analysis wrote, and at each τ the L1 error and the empty-annulus fraction
+/// ([`ring_empty_annuli`]).
 pub struct RingReport {
     pub files: Vec<PathBuf>,
     pub l1: Vec<(f64, f64)>,
+    pub empty_annuli: Vec<(f64, f64)>,
 }
 
 pub fn analyse_ring(run: &Path) -> Result<RingReport> {
@@ -38,8 +41,9 @@ pub fn analyse_ring(run: &Path) -> Result<RingReport> {
     let mut profiles = String::from(
         "tau,r,count,sigma_mean,sigma_exact,sigma_min,sigma_max,sigma_p10,sigma_p90\n",
     );
-    let mut errors = String::from("tau,l1\n");
+    let mut errors = String::from("tau,l1,empty_annuli\n");
     let mut l1s = Vec::new();
+    let mut empties = Vec::new();
     let mut averaged = Vec::new();
     let mut exact_curves = Vec::new();
     let mut band = Vec::new();
@@ -89,8 +93,10 @@ pub fn analyse_ring(run: &Path) -> Result<RingReport> {
                 rec.spacing
             );
         }
-        let _ = writeln!(errors, "{tau},{l1}");
+        let empty = ring_empty_annuli(&rec, p, time);
+        let _ = writeln!(errors, "{tau},{l1},{empty}");
         l1s.push((tau, l1));
+        empties.push((tau, empty));
         let mut avg = Vec::new();
         for b in stats.iter().filter(|b| b.count > 0) {
             let ex = sol.sigma(b.r, tau);
@@ -196,6 +202,7 @@ pub fn analyse_ring(run: &Path) -> Result<RingReport> {
     Ok(RingReport {
         files: vec![prof_path, err_path, png],
         l1: l1s,
+        empty_annuli: empties,
     })
 }
 
