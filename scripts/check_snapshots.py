@@ -86,8 +86,10 @@ with tempfile.TemporaryDirectory() as tmp:
     yt_check(tmp / "s1" / "snap_0001.hdf5", 200 + 25, 1)
 
     # 2. h5py on a multi-file snapshot (2D Sedov, 3 files per snapshot).
+    # With an AV switch, so that each particle's α (ViscosityParameters) is written too.
     run("sedov2d.toml", tmp / "m", "particles.n=30", "time.end=0.01",
-        "output.interval=0.01", "output.files_per_snapshot=3")
+        "output.interval=0.01", "output.files_per_snapshot=3",
+        'artificial_viscosity.switch="morris_monaghan"')
     parts = sorted((tmp / "m").glob("snap_0001.*.hdf5"))
     assert len(parts) == 3, parts
     ids, counts = [], []
@@ -116,7 +118,11 @@ with tempfile.TemporaryDirectory() as tmp:
     assert not data.metadata.partial_snapshot
     assert len(data.gas.masses) == 900
     assert np.array_equal(np.sort(np.asarray(data.gas.particle_ids)), np.sort(ids))
-    print(f"swiftsimio: virtual file of {len(parts)} parts, {len(data.gas.masses)} particles")
+    alpha = np.asarray(data.gas.viscosity_parameters)
+    # The switch keeps α between α_min = 0.1 and α = 1 (problems/sedov2d.toml).
+    assert len(alpha) == 900 and alpha.min() >= 0.1 and alpha.max() <= 1.0, alpha
+    print(f"swiftsimio: virtual file of {len(parts)} parts, {len(data.gas.masses)} particles, "
+          f"α {alpha.min():.3f}–{alpha.max():.3f}")
     # sphdisk follows the virtual file to its parts.
     subprocess.run([exe, "render", str(virtual), "--out", str(tmp / "m" / "v.png")],
                    check=True, stdout=subprocess.DEVNULL)

@@ -467,6 +467,9 @@ impl<const D: usize> Run<D> {
             self.st.steps,
         );
         s.kernel = self.cfg.particles.kernel;
+        if self.phys.av.switch().is_some() {
+            s.alpha.clone_from(&p.alpha);
+        }
         if let Some(g) = &self.phys.gravity {
             // At the origin of the run's frame, in the file's frame like the gas.
             s.point_masses.push(PointMassRecord {

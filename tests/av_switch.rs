@@ -85,6 +85,20 @@ fn sod_with_the_switch_keeps_alpha_at_the_shock_and_lets_it_decay_elsewhere() {
         .map(|i| p.alpha[i])
         .fold(0.0f64, f64::max);
     assert!(fan < decayed(0.998), "α in the rarefaction: {fan}");
+
+    // The snapshots carry each particle's α (ViscosityParameters) when a switch runs, and
+    // nothing of it without one.
+    let read = |r: &common::Run<1>| {
+        sphdisk::io::hdf5::read_snapshot(&r.dir.path().join("final.hdf5")).expect("final.hdf5")
+    };
+    let snap = read(&switched);
+    assert_eq!(snap.alpha.len(), p.len());
+    let by_id: std::collections::HashMap<u64, f64> =
+        p.id.iter().copied().zip(p.alpha.iter().copied()).collect();
+    for (id, a) in snap.id.iter().zip(&snap.alpha) {
+        assert_eq!(*a, by_id[id], "α of particle {id}");
+    }
+    assert!(read(&constant).alpha.is_empty());
 }
 
 /// Amplitude of the velocity's first Fourier mode in a periodic box of length 1.

@@ -378,6 +378,17 @@ fn encode_part(
     for (name, data, e, desc) in scalars {
         add_dataset(&mut gas, name, data, None, e, desc, u);
     }
+    if !snap.alpha.is_empty() {
+        add_dataset(
+            &mut gas,
+            "ViscosityParameters",
+            &snap.alpha[r.clone()],
+            None,
+            exps(0.0, 0.0, 0.0),
+            "Artificial-viscosity coefficients α of the switch",
+            u,
+        );
+    }
     if meta.physical {
         // T = μ m_p P/(ρ k_B): P/ρ is c_s² of the isothermal sound speed for every EOS
         // (ideal: (γ−1) u; locally isothermal: c_s(R)²; 2D: the integrated P over Σ).
@@ -673,6 +684,7 @@ fn clear_particles(s: &mut Snapshot) {
         &mut s.u,
         &mut s.p,
         &mut s.diss,
+        &mut s.alpha,
     ] {
         v.clear();
     }
@@ -692,6 +704,7 @@ fn append(into: &mut Snapshot, s: Snapshot) {
     into.u.extend(s.u);
     into.p.extend(s.p);
     into.diss.extend(s.diss);
+    into.alpha.extend(s.alpha);
     into.point_masses.extend(s.point_masses);
 }
 
@@ -867,6 +880,7 @@ fn read_one(path: &Path) -> Result<Part> {
             .unwrap_or_else(zeros),
         p: column(&["Pressures", "Pressure"], "Pressures")?.unwrap_or_else(zeros),
         diss: column(&["DissipationRates"], "DissipationRates")?.unwrap_or_else(zeros),
+        alpha: column(&["ViscosityParameters"], "ViscosityParameters")?.unwrap_or_default(),
         point_masses: read_point_masses(&file, path)?,
         kernel: read_kernel(&file),
     };
@@ -952,6 +966,7 @@ mod tests {
             u: col(),
             p: col(),
             diss: col(),
+            alpha: col(),
             point_masses: vec![PointMassRecord {
                 id: u64::MAX,
                 pos: [0.5, 0.25, 0.0],

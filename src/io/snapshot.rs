@@ -38,6 +38,9 @@ pub struct Snapshot {
     pub p: Vec<f64>,
     /// Specific viscous dissipation rate (energy / mass / time).
     pub diss: Vec<f64>,
+    /// Each particle's artificial-viscosity α from a switch (`ViscosityParameters`, as
+    /// SWIFT's SPHENIX names it); empty when the run had none.
+    pub alpha: Vec<f64>,
     /// Point masses (central star, binary components): position and mass.
     pub point_masses: Vec<PointMassRecord>,
     /// The kernel the run used (`particles.kernel`; SWIFT's `/HydroScheme` names it):
@@ -105,6 +108,7 @@ impl Snapshot {
             u: p.u.clone(),
             p: p.p.clone(),
             diss: p.diss.clone(),
+            alpha: Vec::new(),
             point_masses: Vec::new(),
             // The caller knows the run's kernel (`Simulation::snapshot` sets it).
             kernel: KernelKind::default(),
@@ -162,7 +166,7 @@ impl Snapshot {
         let finite: Check = f64::is_finite;
         let positive: Check = |x| x > 0.0 && x.is_finite();
         let non_negative: Check = |x| x >= 0.0 && x.is_finite();
-        let columns: [(&str, &[f64], Check, &str); 13] = [
+        let columns: [(&str, &[f64], Check, &str); 14] = [
             ("Coordinates (x)", &self.pos[0], finite, "finite"),
             ("Coordinates (y)", &self.pos[1], finite, "finite"),
             ("Coordinates (z)", &self.pos[2], finite, "finite"),
@@ -175,8 +179,16 @@ impl Snapshot {
             ("InternalEnergies", &self.u, non_negative, "≥ 0"),
             ("Pressures", &self.p, finite, "finite"),
             ("DissipationRates", &self.diss, finite, "finite"),
+            ("ViscosityParameters", &self.alpha, non_negative, "≥ 0"),
             ("ParticleIDs", &[], finite, ""),
         ];
+        if !self.alpha.is_empty() && self.alpha.len() != self.len() {
+            bail!(
+                "PartType0/ViscosityParameters: {} entries for {} particles",
+                self.alpha.len(),
+                self.len()
+            );
+        }
         for (name, v, ok, what) in columns {
             if let Some(i) = v.iter().position(|&x| !ok(x)) {
                 bail!(
