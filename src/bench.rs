@@ -1,6 +1,8 @@
 //! `sphdisk bench`: throughput of the sweep on a 3D periodic box of uniformly spread
 //! particles at a chosen neighbour count — particle updates per second, pairs per second
-//! per core, the window's peak memory, and the process's peak memory — for each thread count.
+//! per core, the window's peak memory, and the process's peak memory — for each thread count,
+//! with the time per stage of the sweep, the time outside it, and the speed-up and parallel
+//! efficiency over one thread.
 
 use std::time::Instant;
 
@@ -35,6 +37,53 @@ pub struct BenchResult {
     pub peak_rss_bytes: u64,
     /// Seconds per step in each part of the sweep.
     pub times_per_step: crate::sweep::StageTimes,
+    /// Seconds per step outside the sweep: the kicks and drift, the time step, the
+    /// integrator's copies.
+    pub outside_sweep_seconds_per_step: f64,
+    /// Time per step on one thread over this one (when this call measured one thread at
+    /// the same size), and that over the thread count.
+    pub speedup: Option<f64>,
+    pub parallel_efficiency: Option<f64>,
+}
+
+impl BenchResult {
+    /// Fills `speedup` and `parallel_efficiency` against `one_thread`'s time per step.
+    pub fn compare_with(&mut self, one_thread: &BenchResult) {
+        let s = one_thread.seconds_per_step / self.seconds_per_step;
+        self.speedup = Some(s);
+        self.parallel_efficiency = Some(s / self.threads as f64);
+    }
+
+    /// The header of [`BenchResult::csv_row`].
+    pub const CSV_HEADER: &'static str = "particles,threads,window,mean_neighbours,seconds_per_step,particle_updates_per_second,pairs_per_second,pairs_per_second_per_core,speedup,parallel_efficiency,build,find_pairs,density,gradient,force,finish,outside_sweep,peak_window_bytes,peak_rss_bytes";
+
+    /// One CSV row (times in seconds per step; an empty speedup where none was measured).
+    pub fn csv_row(&self) -> String {
+        let opt = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6}"));
+        let t = &self.times_per_step;
+        format!(
+            "{},{},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{}",
+            self.particles,
+            self.threads,
+            self.window,
+            self.mean_neighbours,
+            self.seconds_per_step,
+            self.particle_updates_per_second,
+            self.pairs_per_second,
+            self.pairs_per_second_per_core,
+            opt(self.speedup),
+            opt(self.parallel_efficiency),
+            t.build,
+            t.find_pairs,
+            t.density,
+            t.gradient,
+            t.force,
+            t.finish,
+            self.outside_sweep_seconds_per_step,
+            self.peak_window_bytes,
+            self.peak_rss_bytes
+        )
+    }
 }
 
 /// A jittered cubic lattice of about `n` particles in the unit periodic box, with h set for
@@ -88,6 +137,8 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     }
     let times_per_step = times.scaled(1.0 / steps as f64);
     let secs = start.elapsed().as_secs_f64();
+    let t = &times_per_step;
+    let in_sweep = t.build + t.find_pairs + t.density + t.gradient + t.force + t.finish + t.wait;
     let threads = rayon::current_num_threads();
     let per_step_pairs = pairs as f64 / steps as f64;
     Ok(BenchResult {
@@ -104,6 +155,9 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
         peak_window_bytes: peak * crate::sweep::pairs::BYTES_PER_PAIR,
         full_list_bytes: per_step_pairs as usize * crate::sweep::pairs::BYTES_PER_PAIR,
         peak_rss_bytes: peak_rss_bytes(),
+        outside_sweep_seconds_per_step: (secs / steps as f64 - in_sweep).max(0.0),
         times_per_step,
+        speedup: None,
+        parallel_efficiency: None,
     })
 }

@@ -127,6 +127,9 @@ enum Command {
         /// Print JSON lines instead of a table.
         #[arg(long)]
         json: bool,
+        /// Also write every row to this CSV file (for plotting).
+        #[arg(long)]
+        csv: Option<PathBuf>,
     },
     /// Load imbalance and ghost fraction of the k-d domain decomposition on a 2D disk and a
     /// 3D clustered box, without running a simulation.
@@ -606,7 +609,14 @@ fn real_main(cli: Cli) -> Result<()> {
             steps,
             window,
             json,
+            csv,
         } => {
+            if let Some(path) = &csv {
+                // Refuse an unwritable path before the measurements, not after.
+                std::fs::write(path, "")
+                    .with_context(|| format!("--csv: cannot write {}", path.display()))?;
+            }
+            let mut rows: Vec<String> = vec![sphdisk::bench::BenchResult::CSV_HEADER.to_string()];
             let window = match window {
                 WindowArg::Sweep => Window::Sweep,
                 WindowArg::Full => Window::FullList,
@@ -628,10 +638,17 @@ fn real_main(cli: Cli) -> Result<()> {
                 );
             }
             for &np in &n {
+                let mut one_thread: Option<sphdisk::bench::BenchResult> = None;
                 for &t in &with_threads {
                     let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build()?;
-                    let r =
+                    let mut r =
                         pool.install(|| sphdisk::bench::run_one(np, neighbours, steps, window))?;
+                    if r.threads == 1 {
+                        one_thread = Some(r.clone());
+                    } else if let Some(one) = &one_thread {
+                        r.compare_with(one);
+                    }
+                    rows.push(r.csv_row());
                     if json {
                         println!("{}", serde_json::to_string(&r)?);
                     } else {
@@ -652,10 +669,31 @@ fn real_main(cli: Cli) -> Result<()> {
                         );
                         let t = &r.times_per_step;
                         println!(
-                            "          per step: build {:.3} s, find pairs {:.3} s, density {:.3} s, gradient {:.3} s, force {:.3} s, finish {:.3} s",
-                            t.build, t.find_pairs, t.density, t.gradient, t.force, t.finish
+                            "          per step: build {:.3} s, find pairs {:.3} s, density {:.3} s, gradient {:.3} s, force {:.3} s, finish {:.3} s, outside the sweep {:.3} s",
+                            t.build,
+                            t.find_pairs,
+                            t.density,
+                            t.gradient,
+                            t.force,
+                            t.finish,
+                            r.outside_sweep_seconds_per_step
                         );
+                        if let (Some(s), Some(e)) = (r.speedup, r.parallel_efficiency) {
+                            println!(
+                                "          speed-up over 1 thread {s:.2}, parallel efficiency {:.0}%",
+                                100.0 * e
+                            );
+                        }
                     }
+                }
+            }
+            if let Some(path) = csv {
+                let mut text = rows.join("\n");
+                text.push('\n');
+                std::fs::write(&path, text)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                if !json {
+                    println!("wrote {}", path.display());
                 }
             }
             Ok(())

@@ -1,0 +1,80 @@
+//! `sphdisk bench --csv`: one row per thread count, the speed-up and parallel efficiency
+//! against the one-thread row, and the time per step split into the sweep's stages and
+//! the rest. (The figures themselves are timings and belong in BENCHMARKS.md; this checks
+//! that the report is consistent with itself.)
+
+mod common;
+use common::sphdisk_cli;
+
+#[test]
+fn bench_writes_a_consistent_csv_of_thread_scaling() {
+    let d = tempfile::tempdir().unwrap();
+    let csv = d.path().join("scaling.csv");
+    let (code, out, err) = sphdisk_cli(
+        Some(d.path()),
+        &[
+            "bench",
+            "--n",
+            "4000",
+            "--steps",
+            "2",
+            "--with-threads",
+            "1",
+            "--with-threads",
+            "2",
+            "--csv",
+            csv.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("parallel efficiency"), "{out}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let col = |row: &str, name: &str| -> String {
+        let k = header.iter().position(|h| *h == name).unwrap();
+        row.split(',').nth(k).unwrap().to_string()
+    };
+    for row in &lines[1..] {
+        assert_eq!(row.split(',').count(), header.len(), "{row}");
+        let f = |name: &str| col(row, name).parse::<f64>().unwrap();
+        // The stages and the rest add up to the step (the rest is what is left over).
+        let parts: f64 = [
+            "build",
+            "find_pairs",
+            "density",
+            "gradient",
+            "force",
+            "finish",
+            "outside_sweep",
+        ]
+        .iter()
+        .map(|n| f(n))
+        .sum();
+        let step = f("seconds_per_step");
+        assert!((parts - step).abs() <= 1e-5 * step, "{parts} vs {step}");
+        assert!(f("pairs_per_second_per_core") * f("threads") <= f("pairs_per_second") * 1.000001);
+    }
+    assert_eq!(col(lines[1], "threads"), "1");
+    assert_eq!(
+        col(lines[1], "speedup"),
+        "",
+        "no speed-up of one thread over itself"
+    );
+    let s: f64 = col(lines[2], "speedup").parse().unwrap();
+    let e: f64 = col(lines[2], "parallel_efficiency").parse().unwrap();
+    let t1: f64 = col(lines[1], "seconds_per_step").parse().unwrap();
+    let t2: f64 = col(lines[2], "seconds_per_step").parse().unwrap();
+    // Six significant digits in the file.
+    assert!((s - t1 / t2).abs() <= 1e-5 * s, "{s} vs {}", t1 / t2);
+    assert!((e - s / 2.0).abs() <= 1e-5, "{e} vs {s}/2");
+
+    // An unwritable path is refused before anything is measured, naming --csv.
+    let (code, _, err) = sphdisk_cli(
+        Some(d.path()),
+        &["bench", "--n", "4000", "--csv", "/nonexistent/dir/x.csv"],
+    );
+    assert_ne!(code, 0);
+    assert!(err.contains("--csv") && err.lines().count() <= 2, "{err}");
+}
