@@ -96,6 +96,9 @@ enum Command {
         /// problem file has `[binary]`).
         #[arg(long)]
         no_roche: bool,
+        /// Frames per second of a run folder's `movie.gif` (1 to 50).
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=50))]
+        fps: u32,
     },
     /// Check a problem file (keys, values, initial particles) without running it.
     Check {
@@ -530,6 +533,7 @@ fn real_main(cli: Cli) -> Result<()> {
             ylim,
             slice_z,
             no_roche,
+            fps,
         } => {
             use sphdisk::render::interpolate::Extent;
             let mut opts = RenderOptions::new(quantity.parse()?, view.parse()?);
@@ -560,7 +564,14 @@ fn real_main(cli: Cli) -> Result<()> {
             if input.is_dir() {
                 let out = out.unwrap_or_else(|| input.join(format!("frames_{name}")));
                 let frames = sphdisk::render::movie::render_run(&input, &opts, &out)?;
-                println!("wrote {} frames in {}", frames.len(), out.display());
+                let gif = out.join("movie.gif");
+                sphdisk::render::movie::write_gif(&frames, &gif, fps)?;
+                println!(
+                    "wrote {} frames in {} and the movie {}",
+                    frames.len(),
+                    out.display(),
+                    gif.display()
+                );
             } else {
                 let snap = sphdisk::io::hdf5::read_snapshot_with_h(&input)?.in_run_frame();
                 let out = out.unwrap_or_else(|| {

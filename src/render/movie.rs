@@ -1,7 +1,8 @@
 //! `sphdisk render` on a run folder: every snapshot of the run (from `snapshots.json`, and
 //! the final state when it is later) as a numbered PNG frame, all with one frame and one
 //! colour range so that the frames make a movie, and all
-//! with the same overlay (`RenderOptions::roche_q`: a binary's Roche lobes).
+//! with the same overlay (`RenderOptions::roche_q`: a binary's Roche lobes); and the frames
+//! assembled into an animated GIF ([`write_gif`]) that any browser or viewer plays.
 
 use std::path::{Path, PathBuf};
 
@@ -74,6 +75,45 @@ pub fn render_run(run: &Path, opts: &RenderOptions, out: &Path) -> Result<Vec<Pa
         written.push(path);
     }
     Ok(written)
+}
+
+/// The PNG `frames` (all of one size, as [`render_run`] writes them) as an animated GIF at
+/// `fps` frames per second, looping, at `path`. Each frame gets its own 256-colour palette
+/// (NeuQuant, the GIF encoder's quantiser).
+pub fn write_gif(frames: &[PathBuf], path: &Path, fps: u32) -> Result<()> {
+    use image::codecs::gif::{GifEncoder, Repeat};
+    use image::{Delay, Frame};
+    if frames.is_empty() {
+        bail!("no frames to assemble into {}", path.display());
+    }
+    if !(1..=50).contains(&fps) {
+        bail!("--fps: must lie between 1 and 50, got {fps}");
+    }
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let mut enc = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+    enc.set_repeat(Repeat::Infinite)?;
+    let mut size = None;
+    for f in frames {
+        let img = image::open(f)
+            .with_context(|| format!("cannot read frame {}", f.display()))?
+            .to_rgba8();
+        let dims = img.dimensions();
+        if *size.get_or_insert(dims) != dims {
+            bail!(
+                "{}: {}×{} pixels, the first frame {}×{}",
+                f.display(),
+                dims.0,
+                dims.1,
+                size.unwrap().0,
+                size.unwrap().1
+            );
+        }
+        let delay = Delay::from_numer_denom_ms(1000, fps);
+        enc.encode_frame(Frame::from_parts(img, 0, 0, delay))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -152,6 +192,48 @@ mod tests {
         for (a, b) in plain.iter().zip(&roche) {
             assert_ne!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
         }
+    }
+
+    /// The GIF holds every frame, in order, at the frames' size, with the delay of the
+    /// frame rate, and each frame's pixels are the PNG's within the palette's quantisation.
+    #[test]
+    fn the_frames_play_as_an_animated_gif() {
+        use image::AnimationDecoder;
+        let dir = tempfile::tempdir().unwrap();
+        binary_run(dir.path());
+        let mut opts = RenderOptions::new(Quantity::Density, View::FaceOn);
+        opts.resolution = (64, 64);
+        let frames = render_run(dir.path(), &opts, &dir.path().join("f")).unwrap();
+        let gif = dir.path().join("movie.gif");
+        write_gif(&frames, &gif, 4).unwrap();
+        let dec = image::codecs::gif::GifDecoder::new(std::fs::File::open(&gif).unwrap()).unwrap();
+        let played = dec.into_frames().collect_frames().unwrap();
+        assert_eq!(played.len(), frames.len());
+        for (g, png) in played.iter().zip(&frames) {
+            let png = image::open(png).unwrap().to_rgba8();
+            assert_eq!(g.buffer().dimensions(), png.dimensions());
+            assert_eq!(g.delay().numer_denom_ms(), (250, 1));
+            // Mean absolute difference per channel, of 255: a 256-colour palette of a
+            // picture with a colour map, axes and text stays within a few levels.
+            let diff: f64 = g
+                .buffer()
+                .as_raw()
+                .iter()
+                .zip(png.as_raw())
+                .map(|(a, b)| (*a as f64 - *b as f64).abs())
+                .sum::<f64>()
+                / png.as_raw().len() as f64;
+            assert!(diff < 4.0, "{diff}");
+        }
+        // The two snapshots differ (the ring turned), and so do their frames in the GIF.
+        assert_ne!(played[0].buffer().as_raw(), played[1].buffer().as_raw());
+        assert!(
+            write_gif(&frames, &gif, 0)
+                .unwrap_err()
+                .to_string()
+                .contains("--fps")
+        );
+        assert!(write_gif(&[], &gif, 5).is_err());
     }
 
     #[test]
