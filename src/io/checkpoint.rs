@@ -27,12 +27,27 @@ pub fn folder(run: &Path) -> PathBuf {
     run.join("checkpoints")
 }
 
+/// Particle arrays that checkpoints of earlier versions do not hold: such a checkpoint
+/// reads them as zeros (`alpha`, the switch's α, is unused by the runs that wrote it).
+const ADDED_LATER: [&str; 1] = ["alpha"];
+
 /// Writes the checkpoint of `step` and removes all but the newest [`KEEP`].
 pub fn write<const D: usize>(
     run: &Path,
     step: u64,
     text: &CheckpointText,
     p: &mut Particles<D>,
+) -> Result<PathBuf> {
+    write_except(run, step, text, p, &[])
+}
+
+/// [`write`] without the arrays named in `skip` (tests: a checkpoint of an earlier version).
+fn write_except<const D: usize>(
+    run: &Path,
+    step: u64,
+    text: &CheckpointText,
+    p: &mut Particles<D>,
+    skip: &[&str],
 ) -> Result<PathBuf> {
     let dir = folder(run);
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
@@ -51,10 +66,15 @@ pub fn write<const D: usize>(
     g.create_dataset("interactions")
         .with_u32_data(&p.interactions);
     for (name, v) in p.named_arrays_mut() {
-        g.create_dataset(&name).with_f64_data(v);
+        if !skip.contains(&name.as_str()) {
+            g.create_dataset(&name).with_f64_data(v);
+        }
     }
     fb.add_group(g.finish());
-    fb.set_attr("Checksums", AttrValue::U64Array(checksums(text, p)));
+    fb.set_attr(
+        "Checksums",
+        AttrValue::U64Array(without(checksums(text, p), &checksum_names(p), skip)),
+    );
     let bytes = fb
         .finish()
         .with_context(|| format!("cannot encode checkpoint {}", path.display()))?;
@@ -107,6 +127,20 @@ fn checksums<const D: usize>(text: &CheckpointText, p: &mut Particles<D>) -> Vec
         out.push(v.iter().fold(FNV_OFFSET, |h, x| fnv1a(h, &x.to_le_bytes())));
     }
     out
+}
+
+/// `values` (one per name of `names`) less those of the particle arrays named in `skip`.
+fn without<T: Clone>(values: Vec<T>, names: &[String], skip: &[&str]) -> Vec<T> {
+    values
+        .into_iter()
+        .zip(names)
+        .filter(|(_, n)| {
+            !skip
+                .iter()
+                .any(|s| n.strip_prefix("/Particles/") == Some(*s))
+        })
+        .map(|(v, _)| v)
+        .collect()
 }
 
 /// The checkpoints of a run, newest first.
@@ -186,7 +220,16 @@ pub fn read<const D: usize>(path: &Path) -> Result<(CheckpointText, Particles<D>
     let n = id.len();
     p.id = id;
     p.interactions = interactions;
+    let mut absent: Vec<&str> = Vec::new();
     for (name, v) in p.named_arrays_mut() {
+        if let Some(&later) = ADDED_LATER.iter().find(|&&a| a == name)
+            && g.dataset(&name).is_err()
+        {
+            // A checkpoint of an earlier version.
+            absent.push(later);
+            *v = vec![0.0; n];
+            continue;
+        }
         *v = g
             .dataset(&name)
             .and_then(|d| d.read_f64())
@@ -209,8 +252,9 @@ pub fn read<const D: usize>(path: &Path) -> Result<(CheckpointText, Particles<D>
     match attrs.get("Checksums") {
         None => {}
         Some(AttrValue::U64Array(stored)) => {
-            let names = checksum_names(&mut p);
-            let found = checksums(&text, &mut p);
+            let all_names = checksum_names(&mut p);
+            let found = without(checksums(&text, &mut p), &all_names, &absent);
+            let names = without(all_names.clone(), &all_names, &absent);
             if stored.len() != found.len() {
                 bail!(
                     "{what}: {} checksums stored for {} arrays (the file is corrupt)",
@@ -275,6 +319,33 @@ mod tests {
             let yb: Vec<u64> = y.iter().map(|v| v.to_bits()).collect();
             assert_eq!(xb, yb, "array {a}");
         }
+    }
+
+    /// A checkpoint of an earlier version, without `alpha`, resumes with α = 0 and its
+    /// checksums still checked; any other missing array is an error naming it.
+    #[test]
+    fn a_checkpoint_without_the_later_arrays_reads_them_as_zero() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut p = particles();
+        let path = write_except(dir.path(), 7, &text(), &mut p, &["alpha"]).unwrap();
+        let (_, q) = read::<2>(&path).unwrap();
+        assert_eq!(q.alpha, vec![0.0; p.len()]);
+        assert_eq!(q.u, p.u);
+        assert_eq!(q.vgrad[1][0], p.vgrad[1][0]);
+        // The stored checksums still cover the rest: corrupt u and it is named.
+        let mut bytes = std::fs::read(&path).unwrap();
+        let needle: Vec<u8> = p.u[3].to_le_bytes().to_vec();
+        let at = bytes
+            .windows(8)
+            .position(|w| w == needle.as_slice())
+            .unwrap();
+        bytes[at] ^= 1;
+        std::fs::write(&path, &bytes).unwrap();
+        let e = format!("{:#}", read::<2>(&path).err().unwrap());
+        assert!(e.contains("/Particles/u") && e.contains("checksum"), "{e}");
+        let path = write_except(dir.path(), 8, &text(), &mut p, &["mass"]).unwrap();
+        let e = format!("{:#}", read::<2>(&path).err().unwrap());
+        assert!(e.contains("/Particles/mass"), "{e}");
     }
 
     #[test]
