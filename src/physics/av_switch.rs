@@ -120,7 +120,7 @@ impl AvSwitch {
         dt: f64,
     ) {
         for i in 0..p.len() {
-            let div: f64 = (0..D).map(|a| p.vgrad[a][a][i]).sum();
+            let div = divergence_at(p, i);
             p.alpha[i] = match self.kind {
                 SwitchKind::CullenDehnen => {
                     self.advance_cd(p.alpha[i], (div_old[i], div), p.cs[i], h, dt)
@@ -132,15 +132,19 @@ impl AvSwitch {
 
     /// ∇·v of every particle from its stored velocity gradient (the last evaluation's).
     pub fn divergence<const D: usize>(p: &Particles<D>) -> Vec<f64> {
-        (0..p.len())
-            .map(|i| (0..D).map(|a| p.vgrad[a][a][i]).sum())
-            .collect()
+        (0..p.len()).map(|i| divergence_at(p, i)).collect()
     }
 
     /// α_max for every particle: the state a run starts from.
     pub fn initialise<const D: usize>(&self, p: &mut Particles<D>) {
         p.alpha.iter_mut().for_each(|a| *a = self.alpha_max);
     }
+}
+
+/// ∇·v of particle `i`: the trace of its stored velocity gradient (Eq. 10).
+#[inline]
+fn divergence_at<const D: usize>(p: &Particles<D>, i: usize) -> f64 {
+    (0..D).map(|a| p.vgrad[a][a][i]).sum()
 }
 
 #[cfg(test)]
