@@ -137,8 +137,7 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     }
     let times_per_step = times.scaled(1.0 / steps as f64);
     let secs = start.elapsed().as_secs_f64();
-    let t = &times_per_step;
-    let in_sweep = t.build + t.find_pairs + t.density + t.gradient + t.force + t.finish + t.wait;
+    let in_sweep = times_per_step.total();
     let threads = rayon::current_num_threads();
     let per_step_pairs = pairs as f64 / steps as f64;
     Ok(BenchResult {

@@ -148,6 +148,17 @@ impl StageTimes {
         self.wait += o.wait;
     }
 
+    /// All parts together: the evaluation's time.
+    pub fn total(&self) -> f64 {
+        self.build
+            + self.find_pairs
+            + self.density
+            + self.gradient
+            + self.force
+            + self.finish
+            + self.wait
+    }
+
     /// Every part multiplied by `k` (e.g. totals to per-step means).
     pub fn scaled(&self, k: f64) -> StageTimes {
         StageTimes {
