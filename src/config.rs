@@ -22,6 +22,10 @@ pub struct Config {
     pub problem: ProblemSection,
     pub particles: ParticlesSection,
     pub eos: Eos,
+    /// The SPH formulation: `scheme` = "density_energy" (the paper's, default) or
+    /// "pressure_energy" (needs an ideal gas; `physics::pressure_energy`).
+    #[serde(default)]
+    pub hydro: crate::physics::pressure_energy::HydroSection,
     #[serde(default)]
     pub artificial_viscosity: ArtificialViscosity,
     /// Physical shear viscosity, Eqs. (8)–(10): `nu` or `alpha`, optional `bulk`.
@@ -626,6 +630,13 @@ impl Config {
         self.artificial_viscosity
             .validate()
             .map_err(|e| anyhow::anyhow!("key `{}", e.replacen(" must", "`: must", 1)))?;
+        if self.hydro.scheme == crate::physics::pressure_energy::Scheme::PressureEnergy
+            && !matches!(self.eos, Eos::Ideal { .. })
+        {
+            bail!(
+                "key `hydro.scheme`: \"pressure_energy\" smooths (γ − 1) u and needs eos.kind = \"ideal\""
+            );
+        }
         match self.time.end {
             Some(end) => positive("time.end", end)?,
             None if matches!(self.problem.kind, ProblemKind::Ring | ProblemKind::Disk) => {}

@@ -14,6 +14,7 @@ use crate::boundary::SimBox;
 use crate::particles::Particles;
 use crate::physics::av_switch::{AvSwitch, SwitchKind};
 use crate::physics::eos::cylindrical_radius;
+use crate::physics::pressure_energy::rescaled_pressure;
 use crate::sweep::{Physics, SweepStats, Window, evaluate};
 
 /// Step-limiter factors.
@@ -192,6 +193,14 @@ pub fn kdk_step_with<const D: usize>(
         Some(sw) if sw.kind == SwitchKind::CullenDehnen => AvSwitch::divergence(p),
         _ => Vec::new(),
     };
+    // The pressure–energy p̄ was smoothed from the predicted u; kept consistent with the
+    // corrected one below.
+    let pe_gamma = phys.pressure_energy_gamma();
+    let u_eval = if pe_gamma.is_some() {
+        p.u.clone()
+    } else {
+        Vec::new()
+    };
     let stats = rhs(p);
     half_kick(p, &v_half, &u_half, half, evolve_u);
     if let Some(sw) = switch {
@@ -204,8 +213,16 @@ pub fn kdk_step_with<const D: usize>(
     if evolve_u {
         // Pressure and sound speed from the corrected energy (density is unchanged).
         for i in 0..n {
-            let radius = cylindrical_radius(&p.position(i));
-            let (pr, cs) = phys.eos.pressure_sound_speed(p.rho[i], p.u[i], radius);
+            let (pr, cs) = match pe_gamma {
+                Some(gamma) => {
+                    let pr = rescaled_pressure(p.p[i], u_eval[i], p.u[i]);
+                    (pr, (gamma * pr / p.rho[i]).sqrt())
+                }
+                None => {
+                    let radius = cylindrical_radius(&p.position(i));
+                    phys.eos.pressure_sound_speed(p.rho[i], p.u[i], radius)
+                }
+            };
             p.p[i] = pr;
             p.cs[i] = cs;
         }

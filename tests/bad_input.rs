@@ -213,6 +213,38 @@ fn switch_settings_are_named() {
 }
 
 #[test]
+fn hydro_scheme_and_conductivity_signal_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    let sod = problem("sod.toml");
+    assert_fails(
+        d.path(),
+        &["check", &sod, "--set", "hydro.scheme=\"pressure_entropy\""],
+        &["hydro", "scheme", "pressure_entropy"],
+    );
+    // p̄ smooths (γ − 1) u: an isothermal gas has none.
+    assert_fails(
+        d.path(),
+        &[
+            "check",
+            &problem("disk3d.toml"),
+            "--set",
+            "hydro.scheme=\"pressure_energy\"",
+        ],
+        &["hydro.scheme", "eos.kind"],
+    );
+    assert_fails(
+        d.path(),
+        &[
+            "check",
+            &sod,
+            "--set",
+            "artificial_viscosity.conductivity_signal=\"sound\"",
+        ],
+        &["conductivity_signal", "sound"],
+    );
+}
+
+#[test]
 fn unknown_kernel_shock_tube_window_sedov_deposit_and_conductivity_are_named() {
     let d = tempfile::tempdir().unwrap();
     let sod = problem("sod.toml");

@@ -104,7 +104,7 @@ const fn copy_len(d: usize) -> usize {
 /// Values per particle of partial sums (stage 1, 2, 3) and finals (stage 1, 2).
 const fn partial_len(d: usize, stage: u8) -> usize {
     match stage {
-        DENSITY => 2,
+        DENSITY => 3,
         GRADIENT => d * d,
         _ => d + 3,
     }
@@ -162,7 +162,7 @@ impl<const D: usize> RankExchange<'_, D> {
             for &l in &self.held[q] {
                 let w = &st.work[l as usize];
                 match k {
-                    DENSITY => buf.extend([w.rho, w.interactions as f64]),
+                    DENSITY => buf.extend([w.rho, w.interactions as f64, w.mu_w]),
                     GRADIENT => buf.extend(w.grad.iter().flatten()),
                     _ => {
                         buf.extend(w.acc);
@@ -192,6 +192,7 @@ impl<const D: usize> RankExchange<'_, D> {
                 DENSITY => {
                     w.rho += x[0];
                     w.interactions += x[1] as u32;
+                    w.mu_w += x[2];
                 }
                 GRADIENT => {
                     for a in 0..D {
@@ -619,6 +620,7 @@ mod tests {
     use crate::kernel::Kernel;
     use crate::physics::artificial_viscosity::ArtificialViscosity;
     use crate::physics::eos::Eos;
+    use crate::physics::pressure_energy::Scheme;
     use crate::physics::viscosity::ViscosityModel;
     use crate::rng::Rng;
 
@@ -680,6 +682,7 @@ mod tests {
         let mut fields: Vec<(String, Vec<f64>, f64)> = Vec::new();
         let mut add = |name: &str, v: &Vec<f64>| fields.push((name.to_string(), v.clone(), rms(v)));
         add("rho", &solo.rho);
+        add("p", &solo.p);
         add("du", &solo.du);
         add("diss", &solo.diss);
         add("vsig", &solo.vsig);
@@ -700,7 +703,7 @@ mod tests {
                     r.id[i]
                 );
                 let mine: Vec<f64> = {
-                    let mut v = vec![r.rho[i], r.du[i], r.diss[i], r.vsig[i]];
+                    let mut v = vec![r.rho[i], r.p[i], r.du[i], r.diss[i], r.vsig[i]];
                     for d in 0..D {
                         v.push(r.acc[d][i]);
                         for b in 0..D {
@@ -741,12 +744,26 @@ mod tests {
             binary: None,
             cooling: None,
             outbursts: None,
+            scheme: Scheme::DensityEnergy,
         }
     }
 
     fn check<const D: usize>(bx: SimBox<D>, n: usize, h: f64, ranks: &[usize]) {
+        check_with(bx, n, h, ranks, Scheme::DensityEnergy);
+    }
+
+    fn check_with<const D: usize>(
+        bx: SimBox<D>,
+        n: usize,
+        h: f64,
+        ranks: &[usize],
+        scheme: Scheme,
+    ) {
         let p = lattice(&bx, n, 7);
-        let phys = physics::<D>(h);
+        let phys = Physics {
+            scheme,
+            ..physics::<D>(h)
+        };
         let mut solo = p.clone();
         crate::sweep::evaluate(&mut solo, &bx, &phys, Window::Sweep);
         for &nr in ranks {
@@ -772,6 +789,17 @@ mod tests {
             kinds: [BoundaryKind::Periodic; 2],
         };
         check(bx, 40, 0.04, &[1, 2, 3, 4, 5]);
+    }
+
+    #[test]
+    fn ranks_reproduce_the_single_process_pressure_energy_sums() {
+        // p̄ adds Σ m u W to the density stage's partial sums sent between ranks.
+        let bx = SimBox {
+            min: [0.0, -0.5],
+            max: [1.0, 0.5],
+            kinds: [BoundaryKind::Periodic, BoundaryKind::Reflecting],
+        };
+        check_with(bx, 40, 0.04, &[1, 2, 3, 4], Scheme::PressureEnergy);
     }
 
     #[test]

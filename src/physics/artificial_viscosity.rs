@@ -38,6 +38,13 @@ pub struct ArtificialViscosity {
     /// removes the pressure blip. 0 (off) by default; ignored for gas without an energy
     /// equation.
     pub conductivity: f64,
+    /// The conductivity's signal speed: "pressure" (default, v_sig,u = √(|p_i − p_j| / ρ̄_ij),
+    /// Price 2008) or "velocity" (v_sig,u = |v_ij·r̂_ij|, Wadsley et al. 2008; Price et al.
+    /// 2018): the latter conducts only where the gas moves relative to itself, so it leaves
+    /// a contact at rest alone — the choice for the pressure–energy formulation
+    /// (`[hydro] scheme`), whose smooth p̄ needs no conduction there, while the residual
+    /// noise in p̄ would drive the pressure signal across the contact's jump in u.
+    pub conductivity_signal: ConductivitySignal,
     /// "none" (a constant α, the default), "morris_monaghan" or "cullen_dehnen": each
     /// particle's own α_i, raised by compression (Morris & Monaghan) or by compression
     /// setting in (Cullen & Dehnen) towards `alpha` (then α_max), and decaying to
@@ -49,6 +56,29 @@ pub struct ArtificialViscosity {
     /// The switch's decay constant ℓ: α_i − α_min decays on τ = h / (ℓ c_s) (default 0.1;
     /// only with a switch).
     pub switch_decay: Option<f64>,
+}
+
+/// The artificial conductivity's signal speed (`artificial_viscosity.conductivity_signal`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConductivitySignal {
+    /// √(|p_i − p_j| / ρ̄_ij) (Price 2008).
+    #[default]
+    Pressure,
+    /// |v_ij · r̂_ij|.
+    Velocity,
+}
+
+impl ConductivitySignal {
+    /// v_sig,u of a pair with pressures `p_i`, `p_j`, mean density `rho_mean`, and
+    /// v_ij·r_ij = `vdotr` at separation `r`.
+    #[inline]
+    pub fn speed(self, p_i: f64, p_j: f64, rho_mean: f64, vdotr: f64, r: f64) -> f64 {
+        match self {
+            ConductivitySignal::Pressure => ((p_i - p_j).abs() / rho_mean).sqrt(),
+            ConductivitySignal::Velocity => vdotr.abs() / r,
+        }
+    }
 }
 
 /// The largest α, β or α_u accepted. Shock problems use α ≈ 1, β ≈ 2 (switches go up to
@@ -69,6 +99,7 @@ impl Default for ArtificialViscosity {
             balsara: false,
             orbital: false,
             conductivity: 0.0,
+            conductivity_signal: ConductivitySignal::Pressure,
             switch: SwitchKind::None,
             alpha_min: None,
             switch_decay: None,
@@ -85,6 +116,7 @@ impl ArtificialViscosity {
             balsara: false,
             orbital: false,
             conductivity: 0.0,
+            conductivity_signal: ConductivitySignal::Pressure,
             switch: SwitchKind::None,
             alpha_min: None,
             switch_decay: None,

@@ -10,6 +10,7 @@
 //!    [`force_pair`].
 
 use crate::physics::artificial_viscosity::ArtificialViscosity;
+use crate::physics::pressure_energy::pair_weights;
 
 /// G_αβ = (v_j − v_i)_α f dx_β: particle i adds (m_j/ρ_j) G and particle j adds (m_i/ρ_i) G to
 /// its velocity gradient V_αβ of Eq. (10) (the same sign for both, since both the velocity
@@ -46,6 +47,18 @@ pub struct ForceSide<const D: usize> {
     pub stress: [[f64; D]; D],
     /// Specific internal energy (for the artificial conductivity).
     pub u: f64,
+    /// (γ − 1) u with the pressure–energy formulation (`p` is then p̄); unused otherwise.
+    pub y: f64,
+}
+
+/// Which terms a pair evaluation includes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PairTerms {
+    /// Physical viscosity, Eq. (8).
+    pub viscous: bool,
+    /// The pressure–energy formulation (`physics::pressure_energy`) instead of Eq. (7)'s
+    /// pressure term.
+    pub pressure_energy: bool,
 }
 
 /// One pair's contribution to the right-hand sides, independent of the partners' masses:
@@ -84,9 +97,14 @@ pub struct PairForce<const D: usize> {
 /// du_i/dt += −Σ_j m_j (S_i/ρ_j) : (v_ij ⊗ ∇_i W_ij) ≈ ν_i σ_i : V_i = ½ ν_i σ_i:σ_i ≥ 0,
 /// which conserves total energy exactly (Riffert et al. 1995).
 ///
+/// With `terms.pressure_energy`, the pressure part is Saitoh & Makino's (2013) instead
+/// (`physics::pressure_energy`): dv_i/dt = −Σ_j m_j [(γ−1)² u_i u_j (1/p̄_i + 1/p̄_j) + Π_ij]
+/// ∇_i W_ij, du_i/dt = Σ_j m_j [(γ−1)² u_i u_j/p̄_i + ½ Π_ij] v_ij·∇_i W_ij.
+///
 /// With α_u = `av.conductivity` > 0, Price's (2008) artificial conductivity:
 /// du_i/dt += Σ_j m_j α_u v_sig,u (u_i − u_j) f r / ρ̄_ij (r̂_ij·∇_i W_ij = f r), with
-/// v_sig,u = √(|p_i − p_j| / ρ̄_ij), ρ̄_ij = (ρ_i + ρ_j)/2; j gets the opposite, so the pair
+/// v_sig,u = √(|p_i − p_j| / ρ̄_ij) (or |v_ij·r̂_ij|, `av.conductivity_signal`),
+/// ρ̄_ij = (ρ_i + ρ_j)/2; j gets the opposite, so the pair
 /// exchanges heat without changing the total energy.
 #[inline]
 pub fn force_pair<const D: usize>(
@@ -96,13 +114,12 @@ pub fn force_pair<const D: usize>(
     i: &ForceSide<D>,
     j: &ForceSide<D>,
     av: &ArtificialViscosity,
-    viscous: bool,
+    terms: PairTerms,
 ) -> PairForce<D> {
     let mut vdotr = 0.0;
     for d in 0..D {
         vdotr += (i.v[d] - j.v[d]) * dx[d];
     }
-    let pterm = (i.p + j.p) / (i.rho * j.rho);
     let mut vdotr_av = 0.0;
     for d in 0..D {
         vdotr_av += (i.v_av[d] - j.v_av[d]) * dx[d];
@@ -114,25 +131,31 @@ pub fn force_pair<const D: usize>(
         (i.rho, j.rho),
         0.5 * (i.av_scale + j.av_scale),
     );
+    let (pterm, work_i, work_j) = if terms.pressure_energy {
+        let (a_i, a_j) = pair_weights(i.y, i.p, j.y, j.p);
+        (a_i + a_j, a_i * f * vdotr, a_j * f * vdotr)
+    } else {
+        let gv = f * vdotr / (i.rho * j.rho);
+        ((i.p + j.p) / (i.rho * j.rho), i.p * gv, j.p * gv)
+    };
     let coef = -(pterm + pi) * f;
-    let gv = f * vdotr / (i.rho * j.rho);
     let heat_av = 0.5 * pi * f * vdotr;
     let mut out = PairForce {
         accel: std::array::from_fn(|d| coef * dx[d]),
-        work_i: i.p * gv,
-        work_j: j.p * gv,
+        work_i,
+        work_j,
         heat_i: heat_av,
         heat_j: heat_av,
         vsig,
     };
     if av.conductivity > 0.0 {
         let rho_mean = 0.5 * (i.rho + j.rho);
-        let vsig_u = ((i.p - j.p).abs() / rho_mean).sqrt();
+        let vsig_u = av.conductivity_signal.speed(i.p, j.p, rho_mean, vdotr, r);
         let cond = av.conductivity * vsig_u * (i.u - j.u) * f * r / rho_mean;
         out.work_i += cond;
         out.work_j -= cond;
     }
-    if viscous {
+    if terms.viscous {
         let g: [f64; D] = std::array::from_fn(|d| f * dx[d]);
         let (inv_i, inv_j) = (1.0 / i.rho, 1.0 / j.rho);
         let (mut si_vg, mut sj_vg) = (0.0, 0.0);
@@ -167,8 +190,14 @@ mod tests {
             av_scale: 1.0,
             stress,
             u: 1.5 * p / rho,
+            y: p / rho,
         }
     }
+
+    const PLAIN: PairTerms = PairTerms {
+        viscous: false,
+        pressure_energy: false,
+    };
 
     #[test]
     fn pair_force_conserves_momentum_and_energy() {
@@ -181,17 +210,23 @@ mod tests {
         let b = side([-0.3, 0.4], 0.8, 1.5, [[-0.1, 0.5], [0.5, 0.1]]);
         let mut av = ArtificialViscosity::for_shocks();
         av.conductivity = 1.0;
-        for viscous in [false, true] {
-            let pf = force_pair(&dx, r, k.f(r), &a, &b, &av, viscous);
+        for (viscous, pressure_energy) in
+            [(false, false), (true, false), (false, true), (true, true)]
+        {
+            let terms = PairTerms {
+                viscous,
+                pressure_energy,
+            };
+            let pf = force_pair(&dx, r, k.f(r), &a, &b, &av, terms);
             // dE/dt = m_i v_i·a_i + m_j v_j·a_j + m_i du_i + m_j du_j = 0.
             let mut de = 0.0;
             for d in 0..2 {
                 de += mi * a.v[d] * (mj * pf.accel[d]) - mj * b.v[d] * (mi * pf.accel[d]);
             }
             de += mi * mj * (pf.work_i + pf.heat_i) + mj * mi * (pf.work_j + pf.heat_j);
-            assert!(de.abs() < 1e-12, "viscous {viscous}: {de}");
+            assert!(de.abs() < 1e-12, "{terms:?}: {de}");
         }
-        let pf = force_pair(&dx, r, k.f(r), &a, &b, &av, false);
+        let pf = force_pair(&dx, r, k.f(r), &a, &b, &av, PLAIN);
         assert!(pf.heat_i > 0.0, "approaching pair must heat");
     }
 
@@ -209,7 +244,7 @@ mod tests {
             side([0.0; 2], 1.0, 2.0, [[0.0; 2]; 2]),
             side([0.0; 2], 1.0, 1.0, [[0.0; 2]; 2]),
         );
-        let pf = force_pair(&dx, r, k.f(r), &hot, &cold, &cond, false);
+        let pf = force_pair(&dx, r, k.f(r), &hot, &cold, &cond, PLAIN);
         assert!(
             pf.work_i < 0.0 && pf.work_j > 0.0,
             "{} {}",
@@ -218,12 +253,62 @@ mod tests {
         );
         // m_i du_i + m_j du_j = m_i m_j (work_i + work_j) = 0.
         assert_eq!(pf.work_i + pf.work_j, 0.0);
-        let none = force_pair(&dx, r, k.f(r), &hot, &cold, &off, false);
+        let none = force_pair(&dx, r, k.f(r), &hot, &cold, &off, PLAIN);
         assert_eq!((none.work_i, none.work_j), (0.0, 0.0));
         // A contact in pressure balance: u differs, p does not, nothing flows.
         let mut dense = side([0.0; 2], 8.0, 1.0, [[0.0; 2]; 2]);
         dense.u = 1.5 / 8.0;
-        let pf = force_pair(&dx, r, k.f(r), &cold, &dense, &cond, false);
+        let pf = force_pair(&dx, r, k.f(r), &cold, &dense, &cond, PLAIN);
         assert_eq!((pf.work_i, pf.work_j), (0.0, 0.0));
+        // The velocity signal: at rest nothing flows whatever the pressures; approaching or
+        // receding, heat flows from hot to cold at |v_ij·r̂_ij|.
+        let by_velocity = ArtificialViscosity {
+            conductivity_signal: crate::physics::artificial_viscosity::ConductivitySignal::Velocity,
+            ..cond
+        };
+        let pf = force_pair(&dx, r, k.f(r), &hot, &cold, &by_velocity, PLAIN);
+        assert_eq!((pf.work_i, pf.work_j), (0.0, 0.0));
+        for vx in [-0.5, 0.5] {
+            let moving = side([vx, 0.0], 1.0, 2.0, [[0.0; 2]; 2]);
+            let pf = force_pair(&dx, r, k.f(r), &moving, &cold, &by_velocity, PLAIN);
+            let none = force_pair(&dx, r, k.f(r), &moving, &cold, &off, PLAIN);
+            let (ci, cj) = (pf.work_i - none.work_i, pf.work_j - none.work_j);
+            assert!(ci < 0.0 && (ci + cj).abs() < 1e-15, "{ci} {cj}");
+        }
+    }
+
+    #[test]
+    fn pressure_energy_pair_matches_eq7_where_the_gas_is_uniform() {
+        // Same ρ and u on both sides: p̄ = (γ − 1) ρ u, and the two formulations agree term
+        // by term (physics::pressure_energy); they differ only where ρ or u vary.
+        let k = Kernel::<2>::new(0.5);
+        let (dx, r) = ([0.2, -0.1], (0.05f64).sqrt());
+        let (rho, u, gamma) = (1.3, 2.0, 5.0 / 3.0);
+        let p = (gamma - 1.0) * rho * u;
+        let mut a = side([0.4, 0.1], rho, p, [[0.0; 2]; 2]);
+        let mut b = side([-0.2, 0.3], rho, p, [[0.0; 2]; 2]);
+        for s in [&mut a, &mut b] {
+            s.u = u;
+            s.y = (gamma - 1.0) * u;
+        }
+        let av = ArtificialViscosity::for_shocks();
+        let de = force_pair(&dx, r, k.f(r), &a, &b, &av, PLAIN);
+        let pe = force_pair(
+            &dx,
+            r,
+            k.f(r),
+            &a,
+            &b,
+            &av,
+            PairTerms {
+                pressure_energy: true,
+                ..PLAIN
+            },
+        );
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-13 * x.abs().max(y.abs());
+        for d in 0..2 {
+            assert!(close(de.accel[d], pe.accel[d]), "{de:?} {pe:?}");
+        }
+        assert!(close(de.work_i, pe.work_i) && close(de.work_j, pe.work_j));
     }
 }

@@ -1,6 +1,6 @@
 //! The physics of one SPH scheme, written once for 1, 2 and 3 dimensions: the equation of
 //! state, artificial viscosity for shocks, physical viscosity (Eqs. 8–10), external gravity,
-//! and the fixed set of pair functions the sweep calls (`hydro`).
+//! the choice of formulation (`pressure_energy`), and the fixed set of pair functions the sweep calls (`hydro`).
 
 pub mod artificial_viscosity;
 pub mod av_switch;
@@ -12,4 +12,5 @@ pub mod hydro;
 pub mod l1_stream;
 pub mod mass_transfer;
 pub mod outbursts;
+pub mod pressure_energy;
 pub mod viscosity;

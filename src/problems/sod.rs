@@ -52,19 +52,28 @@ fn left_lattice(cfg: &Config) -> (f64, usize) {
 }
 
 /// Where the gas that started left of the diaphragm ends: the particles sorted by x, the
-/// point half-way between the last one within the first `n_left` (the left state's
-/// count: equal masses) and the next. SPH particles move with the gas, and at a contact
-/// no gas crosses, so this is the contact's position in mass, immune to how the density
-/// is smoothed or binned (a conductivity that smooths u moves it only by moving gas).
-pub fn mass_interface<const D: usize>(p: &Particles<D>, n_left: usize) -> Option<f64> {
-    if n_left == 0 || n_left >= p.len() {
+/// gap between the last one within the first `n_left` (the left state's count: equal
+/// masses) and the next, split in proportion to the volumes m/ρ of the two gases either
+/// side (`rho_left`, `rho_right`: at a contact the exact densities each side of it), so
+/// that the set-up's lattices give the diaphragm itself. SPH particles move with the gas,
+/// and at a contact no gas crosses, so this is the contact's position in mass, immune to
+/// how the density is smoothed or binned (a conductivity that smooths u moves it only by
+/// moving gas).
+pub fn mass_interface<const D: usize>(
+    p: &Particles<D>,
+    n_left: usize,
+    rho_left: f64,
+    rho_right: f64,
+) -> Option<f64> {
+    if n_left == 0 || n_left >= p.len() || !(rho_left > 0.0 && rho_right > 0.0) {
         return None;
     }
     let mut x = p.pos[0].clone();
     let (lo, pivot, _) = x.select_nth_unstable_by(n_left, f64::total_cmp);
     let right = *pivot;
     let left = lo.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-    Some(0.5 * (left + right))
+    let share = (1.0 / rho_left) / (1.0 / rho_left + 1.0 / rho_right);
+    Some(left + share * (right - left))
 }
 
 pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
@@ -317,7 +326,7 @@ pub fn errors<const D: usize>(
     {
         let (_, n_cross) = left_lattice(cfg);
         let n_left = cfg.particles.n.unwrap_or(0) * n_cross.pow(D as u32 - 1);
-        if let Some(x) = mass_interface(p, n_left) {
+        if let Some(x) = mass_interface(p, n_left, f.rho_left, f.rho_right) {
             let spacing = (mass / f.rho_left.min(f.rho_right)).powf(1.0 / D as f64);
             e.insert("contact_mass_position".into(), x);
             e.insert(
@@ -486,11 +495,15 @@ mod tests {
             let r = (n_left..p.len())
                 .map(|i| p.pos[0][i])
                 .fold(f64::MAX, f64::min);
-            0.5 * (l + r)
+            (l, r)
         };
-        let x = mass_interface(&s, n_left).unwrap();
-        assert_eq!(x, edge(&s));
-        assert!((x - 0.5).abs() < 0.01, "{x}");
+        // Sod's states, (ρ_L, ρ_R) = (1, 0.125): the gap between the lattices is split 1 : 8.
+        let x = mass_interface(&s, n_left, 1.0, 0.125).unwrap();
+        let (l, r) = edge(&s);
+        assert!((x - (l + (r - l) / 9.0)).abs() < 1e-15);
+        // On the set-up it is the diaphragm itself, to round-off (the gap's midpoint lies
+        // (Δx_R − Δx_L)/4 to the right: 0.22 of the sparse spacing).
+        assert!((x - 0.5).abs() < 1e-12, "{x}");
         // Compress the right gas towards the wall and push the left gas 0.03 after it.
         for i in 0..s.len() {
             let x = &mut s.pos[0][i];
@@ -501,10 +514,10 @@ mod tests {
             };
         }
         s.pos[0].reverse();
-        let moved = mass_interface(&s, n_left).unwrap();
+        let moved = mass_interface(&s, n_left, 1.0, 0.125).unwrap();
         assert!((moved - x - 0.03).abs() < 0.01, "{moved} {x}");
-        assert_eq!(mass_interface(&s, 0), None);
-        assert_eq!(mass_interface(&s, s.len()), None);
+        assert_eq!(mass_interface(&s, 0, 1.0, 0.125), None);
+        assert_eq!(mass_interface(&s, s.len(), 1.0, 0.125), None);
     }
 
     #[test]

@@ -12,6 +12,8 @@ use crate::physics::artificial_viscosity::ArtificialViscosity;
 pub struct Work<const D: usize> {
     /// Σ m_j W_ij without the self term.
     pub rho: f64,
+    /// Σ m_j u_j W_ij without the self term (the pressure–energy formulation's p̄).
+    pub mu_w: f64,
     /// Σ of Eq. (10).
     pub grad: [[f64; D]; D],
     pub acc: [f64; D],
@@ -25,6 +27,7 @@ impl<const D: usize> Default for Work<D> {
     fn default() -> Self {
         Self {
             rho: 0.0,
+            mu_w: 0.0,
             grad: [[0.0; D]; D],
             acc: [0.0; D],
             du: 0.0,

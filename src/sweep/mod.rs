@@ -25,6 +25,8 @@ use crate::physics::artificial_viscosity::{ArtificialViscosity, av_velocity, bal
 use crate::physics::binary::Binary;
 use crate::physics::eos::{Eos, cylindrical_radius};
 use crate::physics::gravity::PointMass;
+use crate::physics::hydro::PairTerms;
+use crate::physics::pressure_energy::{Scheme, smoothed_pressure};
 use crate::physics::viscosity::ViscosityModel;
 use local::{Local, Work};
 use pairs::{BYTES_PER_PAIR, PairBlock};
@@ -46,6 +48,8 @@ pub struct Physics<const D: usize> {
     pub cooling: Option<crate::physics::cooling::Cooling>,
     /// The dwarf-nova disk instability: α by the gas's branch, u relaxed to the branch.
     pub outbursts: Option<crate::physics::outbursts::Outbursts>,
+    /// The SPH formulation (`physics::pressure_energy`).
+    pub scheme: Scheme,
 }
 
 impl<const D: usize> Physics<D> {
@@ -68,6 +72,7 @@ impl<const D: usize> Physics<D> {
             binary: cfg.binary.as_ref().map(Binary::new),
             cooling: cfg.cooling,
             outbursts: cfg.outbursts,
+            scheme: cfg.hydro.scheme,
         }
     }
 
@@ -82,6 +87,25 @@ impl<const D: usize> Physics<D> {
             binary: None,
             cooling: None,
             outbursts: None,
+            scheme: Scheme::DensityEnergy,
+        }
+    }
+
+    /// γ where the pressure–energy formulation is on (an ideal gas), else `None`.
+    #[inline]
+    pub fn pressure_energy_gamma(&self) -> Option<f64> {
+        match (self.scheme, self.eos) {
+            (Scheme::PressureEnergy, Eos::Ideal { gamma }) => Some(gamma),
+            _ => None,
+        }
+    }
+
+    /// The switches of the pair functions.
+    #[inline]
+    pub fn pair_terms(&self) -> PairTerms {
+        PairTerms {
+            viscous: self.viscous(),
+            pressure_energy: self.pressure_energy_gamma().is_some(),
         }
     }
 
@@ -340,7 +364,7 @@ pub fn sweep<const D: usize>(
             let block = PairBlock::find(local, &phys.kernel, s);
             lap(&mut times.find_pairs, c);
             let c = Instant::now();
-            block.density(local, &mut work);
+            block.density(local, phys.pressure_energy_gamma().is_some(), &mut work);
             lap(&mut times.density, c);
             stats.pairs += block.len() as u64;
             live_pairs += block.len();
@@ -450,6 +474,7 @@ fn finish_slab<const D: usize>(
             match stage {
                 DENSITY => {
                     wo.rho += wg.rho;
+                    wo.mu_w += wg.mu_w;
                     wo.interactions += wg.interactions;
                 }
                 GRADIENT => {
@@ -478,8 +503,20 @@ fn finish_slab<const D: usize>(
         match stage {
             DENSITY => {
                 let rho = work[k].rho + local.mass[k] * phys.kernel.w0();
-                let radius = cylindrical_radius(&local.position(k));
-                let (p, cs) = phys.eos.pressure_sound_speed(rho, local.u[k], radius);
+                let (p, cs) = match phys.pressure_energy_gamma() {
+                    Some(gamma) => smoothed_pressure(
+                        gamma,
+                        work[k].mu_w,
+                        local.mass[k],
+                        local.u[k],
+                        phys.kernel.w0(),
+                        rho,
+                    ),
+                    None => {
+                        let radius = cylindrical_radius(&local.position(k));
+                        phys.eos.pressure_sound_speed(rho, local.u[k], radius)
+                    }
+                };
                 local.rho[k] = rho;
                 local.p[k] = p;
                 local.cs[k] = cs;

@@ -88,6 +88,29 @@ impl<const D: usize> Accumulator for [[f64; D]; D] {
     }
 }
 
+/// Density-stage sums of the pressure–energy formulation: Σ m W, Σ m u W, neighbours.
+#[derive(Clone, Copy, Debug)]
+struct DensitySum {
+    rho: f64,
+    mu_w: f64,
+    n: u32,
+}
+
+impl Accumulator for DensitySum {
+    fn zero() -> Self {
+        Self {
+            rho: 0.0,
+            mu_w: 0.0,
+            n: 0,
+        }
+    }
+    fn add(&mut self, o: &Self) {
+        self.rho += o.rho;
+        self.mu_w += o.mu_w;
+        self.n += o.n;
+    }
+}
+
 /// Force-stage sums: acceleration, du/dt, viscous heating, largest signal velocity.
 #[derive(Clone, Copy, Debug)]
 struct ForceSum<const D: usize> {
@@ -260,9 +283,43 @@ impl PairBlock {
             });
     }
 
-    /// First sum, Eq. (5): ρ_k += Σ m W over this block's pairs.
-    pub fn density<const D: usize>(&self, local: &Local<D>, work: &mut [Work<D>]) {
+    /// First sum, Eq. (5): ρ_k += Σ m W over this block's pairs; with `pressure_energy`
+    /// also Σ m u W (`physics::pressure_energy`).
+    pub fn density<const D: usize>(
+        &self,
+        local: &Local<D>,
+        pressure_energy: bool,
+        work: &mut [Work<D>],
+    ) {
         let m = &local.mass;
+        if pressure_energy {
+            let u = &local.u;
+            self.scatter(
+                work,
+                |p| {
+                    let (i, j) = (p.i as usize, p.j as usize);
+                    let (mwi, mwj) = (m[i] * p.w, m[j] * p.w);
+                    (
+                        DensitySum {
+                            rho: mwj,
+                            mu_w: mwj * u[j],
+                            n: 1,
+                        },
+                        DensitySum {
+                            rho: mwi,
+                            mu_w: mwi * u[i],
+                            n: 1,
+                        },
+                    )
+                },
+                |wk, a: &DensitySum| {
+                    wk.rho += a.rho;
+                    wk.mu_w += a.mu_w;
+                    wk.interactions += a.n;
+                },
+            );
+            return;
+        }
         self.scatter(
             work,
             |p| ((m[p.j as usize] * p.w, 1u32), (m[p.i as usize] * p.w, 1u32)),
@@ -293,8 +350,11 @@ impl PairBlock {
 
     /// Third sum: accelerations (Eq. 7 + viscosity) and du/dt.
     pub fn force<const D: usize>(&self, local: &Local<D>, phys: &Physics<D>, work: &mut [Work<D>]) {
-        // u only where the conductivity reads it: one random load fewer per partner.
-        let conduct = phys.av.conductivity > 0.0;
+        // u only where the conductivity or the pressure–energy terms read it: one random
+        // load fewer per partner.
+        let terms = phys.pair_terms();
+        let y_factor = phys.pressure_energy_gamma().map_or(0.0, |g| g - 1.0);
+        let need_u = phys.av.conductivity > 0.0 || terms.pressure_energy;
         let side = |k: usize| ForceSide {
             v: local.velocity(k),
             v_av: local
@@ -307,16 +367,21 @@ impl PairBlock {
             cs: local.cs[k],
             av_scale: local.av_scale[k],
             stress: local.stress[k],
-            u: if conduct { local.u[k] } else { 0.0 },
+            u: if need_u { local.u[k] } else { 0.0 },
+            y: if terms.pressure_energy {
+                y_factor * local.u[k]
+            } else {
+                0.0
+            },
         };
-        let (av, viscous) = (&phys.av, phys.viscous());
+        let av = &phys.av;
         let m = &local.mass;
         self.scatter(
             work,
             |p| {
                 let (i, j) = (p.i as usize, p.j as usize);
                 let dx: [f64; D] = std::array::from_fn(|d| local.pos[d][i] - local.pos[d][j]);
-                let pf = force_pair(&dx, p.r, p.f, &side(i), &side(j), av, viscous);
+                let pf = force_pair(&dx, p.r, p.f, &side(i), &side(j), av, terms);
                 let (mi, mj) = (m[i], m[j]);
                 (
                     ForceSum {

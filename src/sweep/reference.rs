@@ -65,17 +65,23 @@ pub fn full_list_minimum_image<const D: usize>(
             }
         }
     }
+    // Σ m u W with the self term, for the pressure–energy formulation's p̄.
+    let mut mu_w = vec![0.0; n];
     for i in 0..n {
         parts.rho[i] = parts.mass[i] * phys.kernel.w0();
+        mu_w[i] = parts.mass[i] * parts.u[i] * phys.kernel.w0();
         parts.interactions[i] = 0;
     }
     for &(i, j, _, r) in &list {
         let w = phys.kernel.w(r);
         parts.rho[i] += parts.mass[j] * w;
         parts.rho[j] += parts.mass[i] * w;
+        mu_w[i] += parts.mass[j] * parts.u[j] * w;
+        mu_w[j] += parts.mass[i] * parts.u[i] * w;
         parts.interactions[i] += 1;
         parts.interactions[j] += 1;
     }
+    let pe_gamma = phys.pressure_energy_gamma();
     let mut av_scale: Vec<f64> = parts
         .alpha
         .iter()
@@ -83,9 +89,15 @@ pub fn full_list_minimum_image<const D: usize>(
         .collect();
     for i in 0..n {
         let radius = cylindrical_radius(&parts.position(i));
-        let (p, cs) = phys
-            .eos
-            .pressure_sound_speed(parts.rho[i], parts.u[i], radius);
+        let (p, cs) = match pe_gamma {
+            Some(g) => {
+                let p = (g - 1.0) * mu_w[i];
+                (p, (g * p / parts.rho[i]).sqrt())
+            }
+            None => phys
+                .eos
+                .pressure_sound_speed(parts.rho[i], parts.u[i], radius),
+        };
         parts.p[i] = p;
         parts.cs[i] = cs;
         for a in 0..D {
@@ -141,6 +153,7 @@ pub fn full_list_minimum_image<const D: usize>(
         av_scale: av_scale[k],
         stress: stress[k],
         u: parts.u[k],
+        y: pe_gamma.map_or(0.0, |g| (g - 1.0) * parts.u[k]),
     };
     for &(i, j, dx, r) in &list {
         let pf = force_pair(
@@ -150,7 +163,7 @@ pub fn full_list_minimum_image<const D: usize>(
             &side(parts, i),
             &side(parts, j),
             &phys.av,
-            phys.viscous(),
+            phys.pair_terms(),
         );
         let (mi, mj) = (parts.mass[i], parts.mass[j]);
         for d in 0..D {
