@@ -156,6 +156,8 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     let in_sweep = times_per_step.total();
     let threads = rayon::current_num_threads();
     let per_step_pairs = pairs as f64 / steps as f64;
+    // The peak memory of the steps, before the count below builds a working set of its own.
+    let peak_rss = peak_rss_bytes();
     // The last evaluation's positions are the particles' (the final kick moves none).
     let tested = candidates(&Local::build(&p, &bx, phys.kernel.support()));
     let candidates_per_pair = tested as f64 / last_pairs.max(1) as f64;
@@ -173,7 +175,7 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
         peak_window_pairs: peak,
         peak_window_bytes: peak * crate::sweep::pairs::BYTES_PER_PAIR,
         full_list_bytes: per_step_pairs as usize * crate::sweep::pairs::BYTES_PER_PAIR,
-        peak_rss_bytes: peak_rss_bytes(),
+        peak_rss_bytes: peak_rss,
         outside_sweep_seconds_per_step: (secs / steps as f64 - in_sweep).max(0.0),
         times_per_step,
         speedup: None,
