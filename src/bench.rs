@@ -1,8 +1,9 @@
 //! `sphdisk bench`: throughput of the sweep on a 3D periodic box of uniformly spread
 //! particles at a chosen neighbour count — particle updates per second, pairs per second
 //! per core, the window's peak memory, and the process's peak memory — for each thread count,
-//! with the time per stage of the sweep, the time outside it, and the speed-up and parallel
-//! efficiency over one thread.
+//! with the time per stage of the sweep, the time outside it, the speed-up and parallel
+//! efficiency over one thread, and the floating-point operations and bytes moved per pair
+//! of each loop ([`crate::sweep::cost`]).
 
 use std::time::Instant;
 
@@ -17,6 +18,9 @@ use crate::physics::artificial_viscosity::ArtificialViscosity;
 use crate::physics::eos::Eos;
 use crate::problems::lattice;
 use crate::rng::Rng;
+use crate::sweep::cost::{Setting, SweepCost, sweep_cost};
+use crate::sweep::local::Local;
+use crate::sweep::pairs::candidates;
 use crate::sweep::{Physics, Window, evaluate};
 
 /// One benchmark configuration's figures.
@@ -44,6 +48,13 @@ pub struct BenchResult {
     /// the same size), and that over the thread count.
     pub speedup: Option<f64>,
     pub parallel_efficiency: Option<f64>,
+    /// Candidates pair finding tests per pair found (last step's positions).
+    pub candidates_per_pair: f64,
+    /// Flops and bytes moved per pair of each loop, counted from the code.
+    pub cost_per_pair: SweepCost,
+    /// All four loops together.
+    pub flops_per_pair: f64,
+    pub bytes_per_pair: f64,
 }
 
 impl BenchResult {
@@ -55,14 +66,14 @@ impl BenchResult {
     }
 
     /// The header of [`BenchResult::csv_row`].
-    pub const CSV_HEADER: &'static str = "particles,threads,window,mean_neighbours,seconds_per_step,particle_updates_per_second,pairs_per_second,pairs_per_second_per_core,speedup,parallel_efficiency,build,find_pairs,density,gradient,force,finish,outside_sweep,peak_window_bytes,peak_rss_bytes";
+    pub const CSV_HEADER: &'static str = "particles,threads,window,mean_neighbours,seconds_per_step,particle_updates_per_second,pairs_per_second,pairs_per_second_per_core,speedup,parallel_efficiency,build,find_pairs,density,gradient,force,finish,outside_sweep,peak_window_bytes,peak_rss_bytes,candidates_per_pair,flops_per_pair,bytes_per_pair";
 
     /// One CSV row (times in seconds per step; an empty speedup where none was measured).
     pub fn csv_row(&self) -> String {
         let opt = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6}"));
         let t = &self.times_per_step;
         format!(
-            "{},{},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{}",
+            "{},{},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.4},{:.3},{:.3}",
             self.particles,
             self.threads,
             self.window,
@@ -81,7 +92,10 @@ impl BenchResult {
             t.finish,
             self.outside_sweep_seconds_per_step,
             self.peak_window_bytes,
-            self.peak_rss_bytes
+            self.peak_rss_bytes,
+            self.candidates_per_pair,
+            self.flops_per_pair,
+            self.bytes_per_pair
         )
     }
 }
@@ -128,10 +142,12 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     let mut pairs = 0u64;
     let mut peak = warm.peak_pairs;
     let mut times = crate::sweep::StageTimes::default();
+    let mut last_pairs = warm.pairs;
     for _ in 0..steps {
         let dt = time_step(&p, h, &ctl, true);
         let s = kdk_step(&mut p, &bx, &phys, window, dt);
         pairs += s.pairs;
+        last_pairs = s.pairs;
         peak = peak.max(s.peak_pairs);
         times.add(&s.times);
     }
@@ -140,6 +156,12 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     let in_sweep = times_per_step.total();
     let threads = rayon::current_num_threads();
     let per_step_pairs = pairs as f64 / steps as f64;
+    // The peak memory of the steps, before the count below builds a working set of its own.
+    let peak_rss = peak_rss_bytes();
+    // The last evaluation's positions are the particles' (the final kick moves none).
+    let tested = candidates(&Local::build(&p, &bx, phys.kernel.support()));
+    let candidates_per_pair = tested as f64 / last_pairs.max(1) as f64;
+    let cost = sweep_cost::<3>(&Setting::of(&phys, candidates_per_pair));
     Ok(BenchResult {
         particles: p.len(),
         threads,
@@ -153,10 +175,14 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
         peak_window_pairs: peak,
         peak_window_bytes: peak * crate::sweep::pairs::BYTES_PER_PAIR,
         full_list_bytes: per_step_pairs as usize * crate::sweep::pairs::BYTES_PER_PAIR,
-        peak_rss_bytes: peak_rss_bytes(),
+        peak_rss_bytes: peak_rss,
         outside_sweep_seconds_per_step: (secs / steps as f64 - in_sweep).max(0.0),
         times_per_step,
         speedup: None,
         parallel_efficiency: None,
+        candidates_per_pair,
+        cost_per_pair: cost,
+        flops_per_pair: cost.total().flops,
+        bytes_per_pair: cost.total().bytes,
     })
 }

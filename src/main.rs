@@ -689,6 +689,30 @@ fn real_main(cli: Cli) -> Result<()> {
                             t.finish,
                             r.outside_sweep_seconds_per_step
                         );
+                        let c = &r.cost_per_pair;
+                        println!(
+                            "          per pair: find pairs {:.1} flops {:.0} B ({:.2} candidates), density {:.1} flops {:.0} B, gradient {:.1} flops {:.0} B, force {:.1} flops {:.0} B; flops per pair {:.1}, bytes moved per pair {:.0}",
+                            c.find.flops,
+                            c.find.bytes,
+                            r.candidates_per_pair,
+                            c.density.flops,
+                            c.density.bytes,
+                            c.gradient.flops,
+                            c.gradient.bytes,
+                            c.force.flops,
+                            c.force.bytes,
+                            r.flops_per_pair,
+                            r.bytes_per_pair
+                        );
+                        let per_step = r.pairs_per_second * r.seconds_per_step;
+                        let rate = |secs: f64| per_step / secs;
+                        println!(
+                            "          pairs/s of each loop: find pairs {:.3e}, density {:.3e}, gradient {:.3e}, force {:.3e}",
+                            rate(t.find_pairs),
+                            rate(t.density),
+                            rate(t.gradient),
+                            rate(t.force)
+                        );
                         if let (Some(s), Some(e)) = (r.speedup, r.parallel_efficiency) {
                             println!(
                                 "          speed-up over 1 thread {s:.2}, parallel efficiency {:.0}%",

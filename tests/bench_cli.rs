@@ -28,6 +28,7 @@ fn bench_writes_a_consistent_csv_of_thread_scaling() {
     );
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("parallel efficiency"), "{out}");
+    assert!(out.contains("bytes moved per pair"), "{out}");
     let text = std::fs::read_to_string(&csv).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 3, "{text}");
@@ -55,6 +56,14 @@ fn bench_writes_a_consistent_csv_of_thread_scaling() {
         let step = f("seconds_per_step");
         assert!((parts - step).abs() <= 1e-5 * step, "{parts} vs {step}");
         assert!(f("pairs_per_second_per_core") * f("threads") <= f("pairs_per_second") * 1.000001);
+        // Bytes moved per pair (sphdisk::sweep::cost): the three sums' fixed 960 B, and pair
+        // finding's 96 B per pair plus 25 B per candidate tested.
+        let bytes = 1056.0 + 25.0 * f("candidates_per_pair");
+        assert!((f("bytes_per_pair") - bytes).abs() < 0.01, "{row}");
+        assert!(
+            f("flops_per_pair") > 0.0 && f("candidates_per_pair") > 1.0,
+            "{row}"
+        );
     }
     assert_eq!(col(lines[1], "threads"), "1");
     assert_eq!(

@@ -10,6 +10,7 @@
 //! last one (the sweep is a ring), which the dependency rules below handle without a special
 //! case.
 
+pub mod cost;
 pub mod local;
 pub mod pairs;
 pub mod reference;

@@ -113,7 +113,7 @@ impl Accumulator for DensitySum {
 
 /// Force-stage sums: acceleration, du/dt, viscous heating, largest signal velocity.
 #[derive(Clone, Copy, Debug)]
-struct ForceSum<const D: usize> {
+pub(crate) struct ForceSum<const D: usize> {
     acc: [f64; D],
     du: f64,
     diss: f64,
@@ -410,6 +410,43 @@ impl PairBlock {
     }
 }
 
+/// How many candidate partners pair finding tests for distance over the whole working set:
+/// for each particle, the particles below it in its own cell and those of its half-stencil
+/// cells ([`PairBlock::find`]'s loops, counted from the cell occupancy alone). Over the pairs
+/// found, the candidates each pair costs ([`crate::sweep::cost`]).
+pub fn candidates<const D: usize>(local: &Local<D>) -> u64 {
+    let stencil = half_stencil::<D>();
+    let grid = &local.grid;
+    let mut total = 0u64;
+    let mut k = 0;
+    while k < local.len() {
+        let c = local.cell[k];
+        let (a, b) = local.cells.range(c);
+        let n = (b - a) as u64;
+        let ci = cell_coords(grid.n, c);
+        let mut others = 0u64;
+        for o in &stencil {
+            let mut nc = [0usize; D];
+            let mut inside = true;
+            for d in 0..D {
+                let x = ci[d] as isize + o[d];
+                if x < 0 || x >= grid.n[d] as isize {
+                    inside = false;
+                    break;
+                }
+                nc[d] = x as usize;
+            }
+            if inside {
+                let (a, b) = local.cells.range(grid.key(nc));
+                others += b.saturating_sub(a) as u64;
+            }
+        }
+        total += n * (n - 1) / 2 + n * others;
+        k = b.max(k + 1);
+    }
+    total
+}
+
 /// Integer cell coordinates from an x-major linear index.
 #[inline]
 fn cell_coords<const D: usize>(n: [usize; D], mut c: u64) -> [usize; D] {
@@ -434,5 +471,25 @@ mod tests {
             let lin = o[0] * 9 + o[1] * 3 + o[2];
             assert!(lin < 0, "{o:?}");
         }
+    }
+
+    #[test]
+    fn candidates_bound_the_pairs_found() {
+        let (p, bx, h) = crate::bench::uniform_box(4000, 50.0, 3).unwrap();
+        let kernel = Kernel::<3>::new(h);
+        let local = Local::build(&p, &bx, kernel.support());
+        let pairs: u64 = (0..local.num_slabs())
+            .map(|s| PairBlock::find(&local, &kernel, s).len() as u64)
+            .sum();
+        let n = local.len() as u64;
+        let c = candidates(&local);
+        assert!(
+            pairs > 0 && pairs < c && c < n * (n - 1) / 2,
+            "{pairs} {c} {n}"
+        );
+        // Cells of at least the support: the half stencil's 13.5 cells hold several
+        // candidates per pair within the sphere.
+        let ratio = c as f64 / pairs as f64;
+        assert!((3.0..20.0).contains(&ratio), "{ratio}");
     }
 }
