@@ -1066,6 +1066,11 @@ mod tests {
     fn flattened_config_lists_dotted_keys() {
         let f = load(SOD, &[]).unwrap().flattened();
         assert_eq!(f.get("particles.n").map(String::as_str), Some("100"));
+        // Defaults are listed too: the snapshots' /HydroScheme reads the formulation here.
+        assert_eq!(
+            f.get("hydro.scheme").map(String::as_str),
+            Some("\"density_energy\"")
+        );
         assert_eq!(f.get("eos.gamma").map(String::as_str), Some("1.4"));
     }
 

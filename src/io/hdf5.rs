@@ -280,7 +280,19 @@ fn encode_part(
     fb.add_group(params.finish());
 
     let mut hydro = fb.create_group("HydroScheme");
-    hydro.set_attr("Scheme", AttrValue::AsciiString("sphdisk SPH".into()));
+    // The formulation (`[hydro] scheme`, physics::pressure_energy), as the run's parameters
+    // name it.
+    let scheme = match meta
+        .parameters
+        .get("hydro.scheme")
+        .map(|v| v.trim_matches('"'))
+    {
+        Some("pressure_energy") => {
+            "sphdisk SPH, pressure-energy (Saitoh & Makino 2013; Hopkins 2013), constant h"
+        }
+        _ => "sphdisk SPH, density-energy (paper Eq. 7), constant h",
+    };
+    hydro.set_attr("Scheme", AttrValue::AsciiString(scheme.into()));
     let kernel = snap.kernel;
     hydro.set_attr(
         "Kernel function",
@@ -765,6 +777,9 @@ fn read_one(path: &Path) -> Result<Part> {
         return Ok(Part::Virtual);
     }
     let box_size = attr_vec(&header, "BoxSize").unwrap_or_else(|| vec![1.0]);
+    if box_size.is_empty() {
+        bail!("{what}: Header/BoxSize holds no value");
+    }
     let box_size: Vec<f64> = (0..3)
         .map(|a| box_size.get(a).copied().unwrap_or(box_size[0]))
         .collect();
@@ -1077,6 +1092,27 @@ mod tests {
     }
 
     #[test]
+    fn the_hydro_scheme_names_the_formulation() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("snap.hdf5");
+        for (scheme, expect) in [
+            (None, "density-energy"),
+            (Some("\"density_energy\""), "density-energy"),
+            (Some("\"pressure_energy\""), "pressure-energy"),
+        ] {
+            let mut m = meta();
+            if let Some(s) = scheme {
+                m.parameters.insert("hydro.scheme".into(), s.into());
+            }
+            write_snapshot(&path, &sample(10, 1), &m, 1).unwrap();
+            let f = File::open(&path).unwrap();
+            let hydro = f.group("HydroScheme").unwrap().attrs().unwrap();
+            let text = attr_text(hydro.get("Scheme").unwrap()).unwrap();
+            assert!(text.contains(expect), "{scheme:?}: {text}");
+        }
+    }
+
+    #[test]
     fn header_carries_swift_metadata() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("snap.hdf5");
@@ -1200,6 +1236,26 @@ mod tests {
             read_snapshot(&dir.path().join("nope.hdf5")).unwrap_err()
         );
         assert!(e.contains("no such file"), "{e}");
+    }
+
+    /// A corrupted header whose BoxSize is an empty array (found by tests/fuzz.rs) is a named
+    /// error, not an index out of bounds.
+    #[test]
+    fn an_empty_box_size_is_a_named_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("empty_box.hdf5");
+        let mut fb = FileBuilder::new();
+        let mut h = fb.create_group("Header");
+        h.set_attr("BoxSize", AttrValue::F64Array(Vec::new()));
+        fb.add_group(h.finish());
+        let mut g = fb.create_group("PartType0");
+        g.create_dataset("Coordinates")
+            .with_f64_data(&[0.1, 0.2, 0.3])
+            .with_shape(&[1, 3]);
+        fb.add_group(g.finish());
+        std::fs::write(&path, fb.finish().unwrap()).unwrap();
+        let e = format!("{:#}", read_snapshot(&path).unwrap_err());
+        assert!(e.contains("BoxSize") && e.contains("empty_box.hdf5"), "{e}");
     }
 
     #[test]
