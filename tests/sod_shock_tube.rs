@@ -116,7 +116,7 @@ fn strong_shock_and_lax_converge_with_the_quintic_spline() {
 /// file's pressure–energy form with the velocity-signal conductivity meets the bars
 /// at n = 200 and 400: blip below 5% (measured 0.05–0.06%) and the gas's edge within 0.1
 /// spacing of the diaphragm (measured 0.008 and 0.015). Total energy stays conserved
-/// (every pair exchanges heat and work antisymmetrically; measured ≤ 3e-7).
+/// (every pair exchanges heat and work antisymmetrically; measured 1e-6, 3e-7 and 2e-9).
 #[test]
 fn a_stationary_contact_keeps_its_pressure_and_its_place() {
     let run = |n: &str, sets: &[&str]| {
@@ -163,7 +163,7 @@ fn a_stationary_contact_keeps_its_pressure_and_its_place() {
 /// problem file's kernel and h: as accurate as the density–energy form (L1 ρ measured
 /// 9.10e-3 vs 9.11e-3 at n = 400, 4.68e-3 vs 4.70e-3 at 800; 10% allows for the two
 /// schemes' different errors at the contact) with the blip below the 5% (measured
-/// 1.2% and 0.45%, against 7.9% and 8.3%).
+/// 1.2% and 0.45%, against 7.9% and 8.3%), and total energy conserved.
 #[test]
 fn sod_with_pressure_energy_is_as_accurate_without_the_blip() {
     for n in ["400", "800"] {
@@ -188,6 +188,7 @@ fn sod_with_pressure_energy_is_as_accurate_without_the_blip() {
         assert!(l1_pe < 1.1 * l1_de, "{l1_pe} vs {l1_de}");
         assert!(error(p, "contact_pressure_blip") < 0.05);
         assert!(error(d, "contact_pressure_blip") > 0.05);
-        assert!(p.conservation.energy.expect("ideal gas") < 1e-5);
+        // KDK's truncation error, as for density–energy (measured 5.4e-6 and 2.2e-6).
+        assert!(p.conservation.energy.expect("ideal gas") < 1e-4);
     }
 }
