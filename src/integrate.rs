@@ -14,7 +14,7 @@ use crate::boundary::SimBox;
 use crate::particles::Particles;
 use crate::physics::av_switch::{AvSwitch, SwitchKind};
 use crate::physics::eos::cylindrical_radius;
-use crate::physics::pressure_energy::rescaled_pressure;
+use crate::physics::pressure_energy::{rescaled_pressure, sound_speed};
 use crate::sweep::{Physics, SweepStats, Window, evaluate};
 
 /// Step-limiter factors.
@@ -216,7 +216,7 @@ pub fn kdk_step_with<const D: usize>(
             let (pr, cs) = match pe_gamma {
                 Some(gamma) => {
                     let pr = rescaled_pressure(p.p[i], u_eval[i], p.u[i]);
-                    (pr, (gamma * pr / p.rho[i]).sqrt())
+                    (pr, sound_speed(gamma, pr, p.rho[i]))
                 }
                 None => {
                     let radius = cylindrical_radius(&p.position(i));

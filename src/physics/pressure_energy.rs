@@ -61,12 +61,17 @@ pub fn smoothed_pressure(
     rho: f64,
 ) -> (f64, f64) {
     let p = ((gamma - 1.0) * (sum_mu_w + m * u * w0)).max(0.0);
-    let cs = if rho > 0.0 {
+    (p, sound_speed(gamma, p, rho))
+}
+
+/// √(γ p̄/ρ) (zero without density).
+#[inline]
+pub fn sound_speed(gamma: f64, p: f64, rho: f64) -> f64 {
+    if rho > 0.0 {
         (gamma * p / rho).sqrt()
     } else {
         0.0
-    };
-    (p, cs)
+    }
 }
 
 /// p̄ after u changed from `u_eval` (the value the evaluation smoothed) to `u_new` at fixed

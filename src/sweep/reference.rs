@@ -7,6 +7,7 @@ use crate::particles::Particles;
 use crate::physics::artificial_viscosity::{av_velocity, balsara_factor};
 use crate::physics::eos::cylindrical_radius;
 use crate::physics::hydro::{ForceSide, force_pair, gradient_pair};
+use crate::physics::pressure_energy::smoothed_pressure;
 use crate::sweep::Physics;
 use crate::sweep::local::{self, Local};
 
@@ -65,11 +66,10 @@ pub fn full_list_minimum_image<const D: usize>(
             }
         }
     }
-    // Σ m u W with the self term, for the pressure–energy formulation's p̄.
+    // Σ m u W without the self term, for the pressure–energy formulation's p̄.
     let mut mu_w = vec![0.0; n];
     for i in 0..n {
         parts.rho[i] = parts.mass[i] * phys.kernel.w0();
-        mu_w[i] = parts.mass[i] * parts.u[i] * phys.kernel.w0();
         parts.interactions[i] = 0;
     }
     for &(i, j, _, r) in &list {
@@ -90,10 +90,14 @@ pub fn full_list_minimum_image<const D: usize>(
     for i in 0..n {
         let radius = cylindrical_radius(&parts.position(i));
         let (p, cs) = match pe_gamma {
-            Some(g) => {
-                let p = (g - 1.0) * mu_w[i];
-                (p, (g * p / parts.rho[i]).sqrt())
-            }
+            Some(g) => smoothed_pressure(
+                g,
+                mu_w[i],
+                parts.mass[i],
+                parts.u[i],
+                phys.kernel.w0(),
+                parts.rho[i],
+            ),
             None => phys
                 .eos
                 .pressure_sound_speed(parts.rho[i], parts.u[i], radius),
