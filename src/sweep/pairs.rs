@@ -173,17 +173,7 @@ impl PairBlock {
                         ranges.clear();
                         let ci = cell_coords(grid.n, c);
                         for o in &stencil {
-                            let mut nc = [0usize; D];
-                            let mut inside = true;
-                            for d in 0..D {
-                                let x = ci[d] as isize + o[d];
-                                if x < 0 || x >= grid.n[d] as isize {
-                                    inside = false;
-                                    break;
-                                }
-                                nc[d] = x as usize;
-                            }
-                            if inside {
+                            if let Some(nc) = offset_cell(grid.n, &ci, o) {
                                 let (a, b) = local.cells.range(grid.key(nc));
                                 if a < b {
                                     ranges.push((a, b));
@@ -426,17 +416,7 @@ pub fn candidates<const D: usize>(local: &Local<D>) -> u64 {
         let ci = cell_coords(grid.n, c);
         let mut others = 0u64;
         for o in &stencil {
-            let mut nc = [0usize; D];
-            let mut inside = true;
-            for d in 0..D {
-                let x = ci[d] as isize + o[d];
-                if x < 0 || x >= grid.n[d] as isize {
-                    inside = false;
-                    break;
-                }
-                nc[d] = x as usize;
-            }
-            if inside {
+            if let Some(nc) = offset_cell(grid.n, &ci, o) {
                 let (a, b) = local.cells.range(grid.key(nc));
                 others += b.saturating_sub(a) as u64;
             }
@@ -445,6 +425,24 @@ pub fn candidates<const D: usize>(local: &Local<D>) -> u64 {
         k = b.max(k + 1);
     }
     total
+}
+
+/// The cell at offset `o` from cell `ci` of a grid of `n` cells per axis, if it lies inside.
+#[inline]
+fn offset_cell<const D: usize>(
+    n: [usize; D],
+    ci: &[usize; D],
+    o: &[isize; D],
+) -> Option<[usize; D]> {
+    let mut nc = [0usize; D];
+    for d in 0..D {
+        let x = ci[d] as isize + o[d];
+        if x < 0 || x >= n[d] as isize {
+            return None;
+        }
+        nc[d] = x as usize;
+    }
+    Some(nc)
 }
 
 /// Integer cell coordinates from an x-major linear index.
