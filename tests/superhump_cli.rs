@@ -107,6 +107,8 @@ fn a_precessing_eccentric_ring_gives_its_growth_precession_and_superhump() {
         "P_sh {ps} ± {eps_err}, beat {beat}"
     );
     assert!(num(&json["beat_mismatch"]).abs() < 0.01, "{json}");
+    // A ring on one ellipse: the m = 1 phase follows the periastron, and is the source.
+    assert_eq!(json["precession"]["source"], "m1_phase", "{json}");
     assert!((num(&json["epsilon"]) - (beat - 1.0)).abs() < 3.0 * eps_err);
     // The predictions for q = 0.1 (analysis::roche: Patterson 0.18 q + 0.29 q²).
     assert!((num(&json["predictions"]["epsilon_patterson2005"]) - 0.0209).abs() < 1e-12);
@@ -151,6 +153,16 @@ fn a_q_series_gives_its_table_and_plot() {
     assert_eq!(lines.len(), 3, "{table}");
     // Sorted by q.
     assert!(lines[1].starts_with("0.1,true,") && lines[2].starts_with("0.2,true,"));
+    let columns = |l: &str| l.split(',').count();
+    assert!(
+        lines.iter().all(|l| columns(l) == columns(lines[0])),
+        "{table}"
+    );
+    let source = lines[0]
+        .split(',')
+        .position(|c| c == "precession_source")
+        .unwrap();
+    assert_eq!(lines[1].split(',').nth(source), Some("m1_phase"), "{table}");
     assert!(is_png(&out.path().join("superhump_scan.png")));
 }
 

@@ -27,7 +27,12 @@
 //!   optimistic. The beat of the precession with the orbit has the period
 //!   P_beat = P_orb/(1 − ω_p), ε_beat = ω_p/(1 − ω_p). The osculating eccentricity vector's
 //!   longitude (`modes.csv` `periastron_inertial_deg`) gives a second rate, reported beside
-//!   it.
+//!   it. In a strongly distorted disk (e ≳ 0.4 with a large m = 2) the m = 1 phase of the
+//!   mass in the window stops following the periastron and flips with the binary's tide;
+//!   a longitude more than 1% of whose row-to-row steps exceed 45° ([`JUMP_DEG`],
+//!   [`MAX_JUMP_FRACTION`]) is not a periastron, and the rate is then the osculating one
+//!   (`source` says which; a note says why). Where both follow the periastron but
+//!   disagree by more than 10% and three errors, a note says so.
 //! - **Light curve.** The dissipation light curve of the same active stretch, its
 //!   periodogram searched between [`PERIOD_RANGE`] P_orb with a floating cubic trend
 //!   (`reports::lightcurve`): the superhump period P_sh with its error,
@@ -144,11 +149,19 @@ pub struct Growth {
 /// The precession of the eccentric disk.
 #[derive(Clone, Debug, Serialize)]
 pub struct Precession {
-    /// ω_p / Ω_orb from the m = 1 phase, and its error (four blocks).
+    /// ω_p / Ω_orb, and its error (four blocks), from the longitude named by `source`.
     pub rate: f64,
     pub rate_err: f64,
+    pub source: PrecessionSource,
+    /// The slope of the m = 1 phase's longitude, its error, and the share of its
+    /// row-to-row steps that jump by more than [`JUMP_DEG`].
+    pub rate_m1_phase: f64,
+    pub rate_m1_phase_err: f64,
+    pub m1_phase_jumps: f64,
     /// The same from the osculating eccentricity vector's longitude.
     pub rate_osculating: f64,
+    pub rate_osculating_err: f64,
+    pub osculating_jumps: f64,
     /// P_beat / P_orb = 1/(1 − ω_p) and ε_beat = ω_p/(1 − ω_p), with errors.
     pub beat_period_orbits: f64,
     pub epsilon_beat: f64,
@@ -346,7 +359,82 @@ pub fn growth(t: &[f64], m1: &[f64], osc: &[f64], m2: &[f64], r_disk: &[f64]) ->
     g
 }
 
-/// The precession over the rows with `from` ≤ t ≤ `to` (orbits; module doc).
+/// Which longitude the precession rate was taken from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PrecessionSource {
+    /// The m = 1 phase of the disk mass (+ 180°).
+    M1Phase,
+    /// The osculating eccentricity vector's longitude.
+    Osculating,
+}
+
+impl PrecessionSource {
+    /// Words for the printed summary and the picture.
+    pub fn describe(self) -> &'static str {
+        match self {
+            PrecessionSource::M1Phase => "m = 1 phase",
+            PrecessionSource::Osculating => "osculating periastron",
+        }
+    }
+}
+
+/// A row-to-row step of a longitude larger than this (degrees, inertial frame, after
+/// unwrapping by the shortest way) is a jump: a periastron precessing at a few per cent of
+/// Ω_orb moves by a degree or less between rows written every few hundredths of an orbit.
+pub const JUMP_DEG: f64 = 45.0;
+
+/// A longitude whose steps are jumps more often than this does not follow the periastron.
+pub const MAX_JUMP_FRACTION: f64 = 0.01;
+
+/// A straight line fitted to one unwrapped longitude track (degrees against time).
+#[derive(Clone, Debug)]
+struct Track {
+    unwrapped: Vec<f64>,
+    /// Slope in Ω_orb, and its error from four blocks.
+    rate: f64,
+    rate_err: f64,
+    /// The share of row-to-row steps larger than [`JUMP_DEG`].
+    jumps: f64,
+}
+
+impl Track {
+    fn fit(t: &[f64], deg: &[f64]) -> Option<Track> {
+        let unwrapped = unwrap_deg(deg);
+        let rad: Vec<f64> = unwrapped.iter().map(|x| x.to_radians()).collect();
+        let (_, rate) = line_fit(t, &rad)?;
+        let blocks = 4;
+        let len = t.len() / blocks;
+        let slopes: Vec<f64> = (0..blocks)
+            .filter_map(|k| {
+                let r = k * len..(k + 1) * len;
+                line_fit(&t[r.clone()], &rad[r]).map(|f| f.1)
+            })
+            .collect();
+        let n = slopes.len() as f64;
+        let mean = slopes.iter().sum::<f64>() / n;
+        let sd = (slopes.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let jumps = unwrapped
+            .windows(2)
+            .filter(|w| (w[1] - w[0]).abs() > JUMP_DEG)
+            .count() as f64
+            / (unwrapped.len() - 1) as f64;
+        Some(Track {
+            unwrapped,
+            rate,
+            rate_err: sd / n.sqrt(),
+            jumps,
+        })
+    }
+
+    fn follows_periastron(&self) -> bool {
+        self.jumps <= MAX_JUMP_FRACTION && self.rate.is_finite() && self.rate_err.is_finite()
+    }
+}
+
+/// The precession over the rows with `from` ≤ t ≤ `to` (orbits; module doc): from the m = 1
+/// phase where it follows the periastron, else from the osculating eccentricity vector's
+/// longitude; `None` where neither does (or fewer than 20 rows).
 pub fn precession(rows: &[ModesRow], from: f64, to: f64) -> Option<Precession> {
     let used: Vec<&ModesRow> = rows
         .iter()
@@ -357,37 +445,34 @@ pub fn precession(rows: &[ModesRow], from: f64, to: f64) -> Option<Precession> {
     }
     let t: Vec<f64> = used.iter().map(|r| r.t).collect();
     let inertial = |turning: f64, t: f64| (turning + t.to_degrees()).rem_euclid(360.0);
-    let peri: Vec<f64> = used
+    let m1: Vec<f64> = used
         .iter()
         .map(|r| inertial(r.m1_phase_deg + 180.0, r.t))
         .collect();
-    let peri = unwrap_deg(&peri);
-    let osc: Vec<f64> = unwrap_deg(
-        &used
-            .iter()
-            .map(|r| r.periastron_inertial_deg)
-            .collect::<Vec<_>>(),
-    );
-    let rad = |d: &[f64]| d.iter().map(|x| x.to_radians()).collect::<Vec<_>>();
-    let (_, rate) = line_fit(&t, &rad(&peri))?;
-    let rate_osculating = line_fit(&t, &rad(&osc)).map_or(f64::NAN, |f| f.1);
-    let blocks = 4;
-    let len = t.len() / blocks;
-    let slopes: Vec<f64> = (0..blocks)
-        .filter_map(|k| {
-            let r = k * len..(k + 1) * len;
-            line_fit(&t[r.clone()], &rad(&peri[r])).map(|f| f.1)
-        })
-        .collect();
-    let mean = slopes.iter().sum::<f64>() / slopes.len() as f64;
-    let sd = (slopes.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (slopes.len() as f64 - 1.0))
-        .sqrt();
-    let rate_err = sd / (slopes.len() as f64).sqrt();
+    let osc: Vec<f64> = used.iter().map(|r| r.periastron_inertial_deg).collect();
+    let m1 = Track::fit(&t, &m1)?;
+    let osc = Track::fit(&t, &osc).filter(|_| osc.iter().all(|x| x.is_finite()));
+    let (source, chosen) = if m1.follows_periastron() {
+        (PrecessionSource::M1Phase, &m1)
+    } else {
+        match &osc {
+            Some(o) if o.follows_periastron() => (PrecessionSource::Osculating, o),
+            _ => return None,
+        }
+    };
+    let (rate, rate_err) = (chosen.rate, chosen.rate_err);
     let beat = 1.0 / (1.0 - rate);
+    let peri = &chosen.unwrapped;
     Some(Precession {
         rate,
         rate_err,
-        rate_osculating,
+        source,
+        rate_m1_phase: m1.rate,
+        rate_m1_phase_err: m1.rate_err,
+        m1_phase_jumps: m1.jumps,
+        rate_osculating: osc.as_ref().map_or(f64::NAN, |o| o.rate),
+        rate_osculating_err: osc.as_ref().map_or(f64::NAN, |o| o.rate_err),
+        osculating_jumps: osc.as_ref().map_or(f64::NAN, |o| o.jumps),
         beat_period_orbits: beat,
         epsilon_beat: rate * beat,
         epsilon_beat_err: rate_err * beat * beat,
@@ -436,6 +521,29 @@ pub fn analyse(
     } else {
         None
     };
+    match &prec {
+        None if g.eccentric => notes.push(format!(
+            "no precession measured over orbits {from:.1}–{to:.1}: fewer than 20 rows, or neither the m = 1 phase nor the osculating periastron follows a periastron (more than {:.0}% of row-to-row steps jump by more than {JUMP_DEG}°)",
+            100.0 * MAX_JUMP_FRACTION
+        )),
+        Some(p) if p.source == PrecessionSource::Osculating => notes.push(format!(
+            "the m = 1 phase does not follow the periastron ({:.1}% of its row-to-row steps jump by more than {JUMP_DEG}°; its slope would give ω_p = {:.4} Ω_orb): the precession is the osculating eccentricity vector's",
+            100.0 * p.m1_phase_jumps,
+            p.rate_m1_phase
+        )),
+        Some(p)
+            if p.osculating_jumps <= MAX_JUMP_FRACTION
+                && (p.rate_osculating - p.rate).abs()
+                    > (3.0 * p.rate_err.hypot(p.rate_osculating_err)).max(0.1 * p.rate.abs()) =>
+        {
+            notes.push(format!(
+                "the m = 1 phase's precession ({}) and the osculating periastron's ({}) disagree by more than 10% and three errors",
+                lightcurve::plus_minus(p.rate, p.rate_err),
+                lightcurve::plus_minus(p.rate_osculating, p.rate_osculating_err)
+            ))
+        }
+        _ => {}
+    }
     let light: Vec<lightcurve::Row> = light.iter().filter(|r| r.t / TAU <= to).copied().collect();
     let lc = match light.first() {
         Some(first) => {
@@ -588,8 +696,10 @@ impl SuperhumpReport {
         }
         if let Some(p) = &f.precession {
             s += &format!(
-                "  precession ω_p = {} Ω_orb (osculating {:.5}), {:.2} turns; beat ε = {}\n",
+                "  precession ω_p = {} Ω_orb from the {} (m = 1 phase {:.5}, osculating {:.5}), {:.2} turns; beat ε = {}\n",
                 lightcurve::plus_minus(p.rate, p.rate_err),
+                p.source.describe(),
+                p.rate_m1_phase,
                 p.rate_osculating,
                 p.turns,
                 lightcurve::plus_minus(p.epsilon_beat, p.epsilon_beat_err)
@@ -738,7 +848,7 @@ fn precession_panel(p: &Precession) -> Panel {
         y_range: (lo - pad, hi + pad),
         series: vec![
             Series {
-                label: Some("from the m = 1 phase".into()),
+                label: Some(format!("from the {}", p.source.describe())),
                 points,
                 color: PALETTE[1],
                 style: SeriesStyle::Line,
@@ -756,13 +866,13 @@ fn precession_panel(p: &Precession) -> Panel {
 /// The table of a q series (one row per run, sorted by q): CSV text.
 pub fn scan_csv(reports: &[(f64, &SuperhumpFigures)]) -> String {
     let mut s = String::from(
-        "q,eccentric,e_peak,peak_orbit,e_saturated,e_end,faded,onset_orbit,e_folding_orbits,r_disk_at_onset,epsilon,epsilon_err,epsilon_beat,epsilon_beat_err,amplitude_mag,epsilon_dynamical_r31,epsilon_dynamical_r_disk,epsilon_patterson2005,epsilon_kato2009\n",
+        "q,eccentric,e_peak,peak_orbit,e_saturated,e_end,faded,onset_orbit,e_folding_orbits,r_disk_at_onset,epsilon,epsilon_err,epsilon_beat,epsilon_beat_err,precession_source,amplitude_mag,epsilon_dynamical_r31,epsilon_dynamical_r_disk,epsilon_patterson2005,epsilon_kato2009\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6}"));
     for (q, f) in reports {
         let p = f.precession.as_ref();
         s.push_str(&format!(
-            "{q},{},{:.6},{:.2},{},{:.6},{},{},{},{},{},{},{},{},{},{:.6},{},{:.6},{:.6}\n",
+            "{q},{},{:.6},{:.2},{},{:.6},{},{},{},{},{},{},{},{},{},{},{:.6},{},{:.6},{:.6}\n",
             f.growth.eccentric,
             f.growth.e_peak,
             f.growth.peak_orbit,
@@ -777,6 +887,10 @@ pub fn scan_csv(reports: &[(f64, &SuperhumpFigures)]) -> String {
             o(f.epsilon_err.filter(|_| f.growth.eccentric)),
             o(p.map(|p| p.epsilon_beat)),
             o(p.map(|p| p.epsilon_beat_err)),
+            p.map_or("", |p| match p.source {
+                PrecessionSource::M1Phase => "m1_phase",
+                PrecessionSource::Osculating => "osculating",
+            }),
             o(f.amplitude_mag.filter(|_| f.growth.eccentric)),
             roche::epsilon_dynamical_r31(*q),
             o(f.growth
@@ -970,6 +1084,64 @@ mod tests {
         assert!((p.rate - w).abs() < 1e-9, "rate {}", p.rate);
         assert!((p.epsilon_beat - w / (1.0 - w)).abs() < 1e-9);
         assert!(p.rate_err < 1e-9);
+    }
+
+    /// Rows of a strongly distorted disk, as the cooler q = 0.1 run (e ≈ 0.46, m = 2 ≈ 0.19)
+    /// wrote them: the m = 1 phase no longer follows the periastron but is held by the
+    /// binary, flipping between 30° and 210° in the turning frame every half orbit, while
+    /// the osculating eccentricity vector's longitude precesses at `w` with a few degrees
+    /// of noise (a seeded LCG).
+    fn distorted_rows(w: f64) -> Vec<ModesRow> {
+        let mut seed = 12345u64;
+        let mut noise = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        (0..2000)
+            .map(|k| {
+                let t = k as f64 * TAU / 50.0;
+                let flip = if (2.0 * t / TAU).floor() as i64 % 2 == 0 {
+                    30.0
+                } else {
+                    210.0
+                };
+                let mut r = row(t, 0.4, (flip + 20.0 * noise()).rem_euclid(360.0));
+                r.periastron_inertial_deg =
+                    (300.0 + (w * t).to_degrees() + 6.0 * noise()).rem_euclid(360.0);
+                r
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_distorted_disks_precession_comes_from_its_osculating_periastron() {
+        let w = 0.026;
+        let p = precession(&distorted_rows(w), 0.0, f64::INFINITY).unwrap();
+        // The osculating longitude's noise (±3°) over 40 orbits (2000 rows) moves the fitted
+        // slope by ~1e-5 Ω_orb: 1e-3 is the bar; the m = 1 phase's fit is out by O(1).
+        assert!(
+            (p.rate - w).abs() < 1e-3,
+            "rate {} ± {}",
+            p.rate,
+            p.rate_err
+        );
+        assert_eq!(p.source, PrecessionSource::Osculating);
+        assert!(p.m1_phase_jumps > 0.01, "{}", p.m1_phase_jumps);
+        assert!(p.osculating_jumps == 0.0);
+        assert!((p.epsilon_beat - w / (1.0 - w)).abs() < 1.1e-3);
+        // The error reflects the scatter of the osculating track, not the m = 1 phase's.
+        assert!(p.rate_err < 1e-3, "{}", p.rate_err);
+    }
+
+    #[test]
+    fn precession_is_refused_when_neither_longitude_follows_the_periastron() {
+        let mut rows = distorted_rows(0.026);
+        for (k, r) in rows.iter_mut().enumerate() {
+            r.periastron_inertial_deg = if k % 2 == 0 { 10.0 } else { 190.0 };
+        }
+        assert!(precession(&rows, 0.0, f64::INFINITY).is_none());
     }
 
     #[test]
