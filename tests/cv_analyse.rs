@@ -1,7 +1,8 @@
 //! Guards `sphdisk analyse cv` as users call it: a short cataclysmic-variable run (the
 //! problem file `cv2d.toml`, 1.5 orbits at a quarter of its stream rate) gives, per
 //! snapshot, a row of `cv_evolution.csv`, and `cv.json` with a disk between half the
-//! circularisation radius and the Roche lobe and a bright spot; a folder that is not a run
+//! circularisation radius and the Roche lobe and a bright spot, and from `monitor.csv` where
+//! the stream's gas went (`cv_accretion.csv`, `.png`); a folder that is not a run
 //! fails with one line naming the file.
 
 mod common;
@@ -63,6 +64,34 @@ fn a_short_cv_run_gives_its_disk_and_bright_spot() {
     assert!(rows[0].starts_with("snapshot,t,orbit,"), "{}", rows[0]);
     assert_eq!(rows.len(), 1 + num("snapshots") as usize, "{csv}");
     assert!(rows.len() >= 4, "{csv}");
+    // Where the stream's gas went, from monitor.csv: the shares of each window add up to
+    // the mass injected in it (the ledger closes to round-off; 1e-5 for the CSV's six
+    // digits).
+    let a = &json["accretion"];
+    let share = |k: &str| {
+        a["last"][k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{k}: {a:#}"))
+    };
+    let sum = share("accreted") + share("returned") + share("escaped") + share("kept");
+    assert!((sum - 1.0).abs() < 1e-9, "{a:#}");
+    assert!(share("injected_per_orbit") > 0.0);
+    let windows = std::fs::read_to_string(out.join("cv_accretion.csv")).unwrap();
+    assert_eq!(windows.lines().count(), 1 + 4, "{windows}");
+    for line in windows.lines().skip(1) {
+        let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        assert!((v[3] + v[4] + v[5] + v[6] - 1.0).abs() < 1e-5, "{line}");
+        assert!(
+            v[7] <= v[6] + 1e-6,
+            "the disk's growth exceeds the particles' {line}"
+        );
+    }
+    let png = std::fs::read(out.join("cv_accretion.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"));
+    assert!(
+        stdout.contains("accretion onto the white dwarf"),
+        "{stdout}"
+    );
 }
 
 #[test]

@@ -39,7 +39,9 @@
 //! Writes into the run folder `cv_evolution.csv` (a row per snapshot, columns as
 //! [`CvFigures::columns`]; `days` only if `run.toml` gives `binary.period_days`, the
 //! overflow columns only in 3D) and `cv.json` (the run's reference radii and the last
-//! snapshot's figures, [`CvJson`]).
+//! snapshot's figures, [`CvJson`]); and from `monitor.csv`, where the stream's gas went
+//! over time and whether the disk has become steady (`reports::cv_accretion`):
+//! `cv_accretion.csv`, `cv_accretion.png` and the key `accretion` of `cv.json`.
 
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -56,6 +58,8 @@ use crate::io::snapshot::Snapshot;
 use crate::io::snapshot_index::snapshots_with_final;
 use crate::physics::binary::{Binary, Region};
 use crate::problems::cv::ECCENTRICITY_WINDOW;
+use crate::render::plot::plot_panels;
+use crate::reports::cv_accretion::{self, AccretionFigures};
 use crate::reports::run_config;
 
 /// The annulus, in units of R90, whose 10° sectors are searched for the brightest one.
@@ -174,6 +178,9 @@ pub struct CvJson {
     pub r_min_ballistic_azimuth_deg: f64,
     pub tidal_radius: f64,
     pub r_31: f64,
+    /// Where the stream's gas went, window by window, from `monitor.csv`
+    /// (`reports::cv_accretion`); `None` without that file or a stream.
+    pub accretion: Option<AccretionFigures>,
     #[serde(flatten)]
     pub last: CvFigures,
 }
@@ -223,6 +230,25 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
     let csv_path = run.join("cv_evolution.csv");
     write_atomic(&csv_path, csv.as_bytes())?;
     let q = b.q;
+    let mut files = vec![csv_path];
+    let monitor = run.join("monitor.csv");
+    let accretion = if monitor.is_file() {
+        let text = std::fs::read_to_string(&monitor)
+            .with_context(|| format!("cannot read {}", monitor.display()))?;
+        let ledger =
+            cv_accretion::parse_ledger(&text).with_context(|| monitor.display().to_string())?;
+        cv_accretion::accretion_figures(&ledger, q)
+    } else {
+        None
+    };
+    if let Some(a) = &accretion {
+        let path = run.join("cv_accretion.csv");
+        write_atomic(&path, cv_accretion::windows_csv(&a.windows).as_bytes())?;
+        files.push(path);
+        let png = run.join("cv_accretion.png");
+        plot_panels(&png, (1000, 900), &cv_accretion::panels(a))?;
+        files.push(png);
+    }
     let r_min_point = *ballistic_stream(q, 0.0).last().expect("starts at L1");
     let json = CvJson {
         run: run.display().to_string(),
@@ -238,16 +264,14 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
         r_min_ballistic_azimuth_deg: azimuth_deg(r_min_point[0], r_min_point[1]),
         tidal_radius: roche::tidal_radius(q),
         r_31: roche::r_31(q),
+        accretion,
         last: rows.last().cloned().expect("at least one snapshot"),
     };
     let json_path = run.join("cv.json");
     let text = serde_json::to_string_pretty(&json).context("cv.json")?;
     write_atomic(&json_path, format!("{text}\n").as_bytes())?;
-    Ok(CvReport {
-        json,
-        rows,
-        files: vec![csv_path, json_path],
-    })
+    files.push(json_path);
+    Ok(CvReport { json, rows, files })
 }
 
 /// `cv_evolution.csv`: a header and a row per snapshot, empty cells for missing figures.
@@ -402,6 +426,34 @@ impl CvReport {
         }
         if let Some(days) = j.last.days {
             let _ = writeln!(s, "last snapshot at {days:.4} d");
+        }
+        if let Some(a) = &j.accretion {
+            let l = &a.last;
+            let at =
+                |o: Option<f64>| o.map_or("not reached".to_string(), |o| format!("orbit {o:.1}"));
+            let _ = writeln!(
+                s,
+                "the stream's gas over orbits {:.1}–{:.1}: accreted {:.3}, returned {:.3}, escaped {:.3}, kept {:.3} (the disk {:.3}) of the {:.4e} injected per orbit; R90 {:.4} = {:.3} of the tidal radius (0.9 R_L {:.4}, r_3:1 {:.4})",
+                l.orbit_start,
+                l.orbit_end,
+                l.accreted,
+                l.returned,
+                l.escaped,
+                l.kept,
+                l.disk_growth,
+                l.injected_per_orbit,
+                l.r_disk_90,
+                a.r_disk_over_tidal,
+                a.roche_lobe_09,
+                a.r_31
+            );
+            let _ = writeln!(
+                s,
+                "accretion onto the white dwarf ({}-orbit windows): half the transfer rate {}, 90% {}",
+                a.window_orbits,
+                at(a.accretion_half_orbit),
+                at(a.accretion_ninety_orbit)
+            );
         }
         for r in &self.rows {
             for n in &r.notes {

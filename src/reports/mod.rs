@@ -4,6 +4,7 @@
 //! figures and pictures. `analysis/` holds the solutions and norms; this layer the commands.
 
 pub mod cv;
+pub mod cv_accretion;
 pub mod disk;
 pub mod lightcurve;
 pub mod outbursts;
