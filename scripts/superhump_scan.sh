@@ -8,8 +8,10 @@
 # Usage: scripts/superhump_scan.sh [ORBITS] [Q...]
 #   ORBITS  orbits per run (default 60); Q  mass ratios (default 0.05 0.1 0.15 0.2 0.25 0.35)
 # Environment: SPHDISK (the binary, default target/release/sphdisk), OUT (default
-# runs/superhump_scan). Runs already finished in OUT are analysed, not run again; a run that
-# stopped part-way is resumed.
+# runs/superhump_scan), SET (more `KEY=VALUE` overrides for every run, separated by spaces;
+# e.g. the cooler disk: SET="eos.cs=0.03 stream.cs=0.03 viscosity.alpha=0.05"), THREADS
+# (per run; default: all cores). Runs already finished in OUT are analysed, not run again; a
+# run that stopped part-way is resumed.
 set -euo pipefail
 orbits=${1:-60}
 shift || true
@@ -21,6 +23,12 @@ if [ ! -x "$bin" ]; then
   echo "error: $bin not found: build it with \`cargo build --release\` or set SPHDISK" >&2
   exit 2
 fi
+extra=()
+for kv in ${SET:-}; do
+  extra+=(--set "$kv")
+done
+threads=()
+[ -z "${THREADS:-}" ] || threads=(--threads "$THREADS")
 mkdir -p "$out"
 end=$(awk -v n="$orbits" 'BEGIN { printf "%.15g", n * 2 * atan2(0, -1) }')
 runs=()
@@ -32,12 +40,13 @@ for q in "${qs[@]}"; do
     echo "q = $q: finished run in $dir"
   elif [ -d "$dir/checkpoints" ]; then
     echo "q = $q: resuming $dir"
-    "$bin" run --resume "$dir" --quiet
+    "$bin" run --resume "$dir" --quiet "${threads[@]}"
   else
     echo "q = $q: $orbits orbits, initial disk to r_out = $r_out a, into $dir"
     # --force: the folder is this script's own (a run killed before its first checkpoint).
     "$bin" run problems/superhump.toml --quiet --force --out "$dir" \
-      --set binary.q="$q" --set initial_disk.r_out="$r_out" --set time.end="$end"
+      --set binary.q="$q" --set initial_disk.r_out="$r_out" --set time.end="$end" \
+      "${extra[@]}" "${threads[@]}"
   fi
 done
 "$bin" analyse superhump "${runs[@]}" --out "$out"
