@@ -16,9 +16,15 @@
 //!   4 max(0, R̂ · ô), ô the unit vector towards the observer;
 //! - free stream gas, isotropically: factor 1.
 //!
+//! With linear limb darkening (coefficient u: intensity ∝ 1 − u (1 − μ), μ the cosine
+//! between the line of sight and the surface's normal) the faces' and the rim's factors
+//! become μ (1 − u + u μ) times 6/(3 − u) and 12/(3 − u) — the same mean over all
+//! directions, less light at grazing angles and more face-on; u = 0 (the default) is the
+//! Lambert radiator above.
+//!
 //! A particle is eclipsed when the ray from it towards the observer passes through the
-//! donor's Roche lobe (Φ < Φ_L1 on the donor's side of L1). Neither the disk's own rim
-//! shadowing its inner parts nor limb darkening is modelled.
+//! donor's Roche lobe (Φ < Φ_L1 on the donor's side of L1). The disk's own rim shadowing
+//! its inner parts is not modelled.
 //!
 //! **Phase.** The simulation frame turns with the binary (accretor at the origin, donor at
 //! (−1, 0, 0)); an observer fixed in space turns the other way in it. Orbital phase 0 is
@@ -57,6 +63,8 @@ pub struct Observer {
     d_l1: f64,
     lobe_reach: f64,
     phi_l1: f64,
+    /// Linear limb-darkening coefficient u of the faces and the rim (0: Lambert).
+    limb_darkening: f64,
 }
 
 /// Samples along the part of a line of sight that crosses the sphere bounding the donor's
@@ -74,7 +82,24 @@ impl Observer {
             d_l1,
             lobe_reach: 1.0 - d_l1,
             phi_l1: roche::l1_potential(q),
+            limb_darkening: 0.0,
         }
+    }
+
+    /// The same observer seeing limb-darkened surfaces (coefficient `u` in [0, 1]).
+    pub fn with_limb_darkening(self, u: f64) -> Self {
+        Self {
+            limb_darkening: u,
+            ..self
+        }
+    }
+
+    /// Lambert's factor `lambert` μ of a surface seen at cosine μ from its normal, limb
+    /// darkened: `lambert` · 3/(3 − u) · μ (1 − u + u μ), which keeps the mean over the sky
+    /// (∫₀¹ μ (1 − u + u μ) dμ = (3 − u)/6 against Lambert's 1/2).
+    fn darkened(&self, mu: f64, lambert: f64) -> f64 {
+        let u = self.limb_darkening;
+        lambert * 3.0 / (3.0 - u) * mu * (1.0 - u + u * mu)
     }
 
     /// Unit vector towards the observer at orbital phase `phase`, in the simulation frame.
@@ -111,14 +136,14 @@ impl Observer {
     /// eclipsed.
     pub fn visibility(&self, x: [f64; 3], surface: Surface, o: [f64; 3]) -> f64 {
         let f = match surface {
-            Surface::Face => 2.0 * self.cos_i.abs(),
+            Surface::Face => self.darkened(self.cos_i.abs(), 2.0),
             Surface::Isotropic => 1.0,
             Surface::Rim => {
                 let r = x[0].hypot(x[1]);
                 if r == 0.0 {
                     0.0
                 } else {
-                    4.0 * ((x[0] * o[0] + x[1] * o[1]) / r).max(0.0)
+                    self.darkened(((x[0] * o[0] + x[1] * o[1]) / r).max(0.0), 4.0)
                 }
             }
         };
@@ -195,23 +220,30 @@ mod tests {
     #[test]
     fn visibility_averages_to_one_over_the_sky() {
         // The factors without the eclipse (which removes only the directions through the
-        // lobe), on a midpoint grid uniform in cos i and azimuth.
+        // lobe), on a midpoint grid uniform in cos i and azimuth; with and without limb
+        // darkening.
         let x = [0.2, 0.1, 0.0];
-        for surface in [Surface::Face, Surface::Rim, Surface::Isotropic] {
+        for (u, surface) in [0.0, 0.6, 1.0]
+            .into_iter()
+            .flat_map(|u| [Surface::Face, Surface::Rim, Surface::Isotropic].map(|s| (u, s)))
+        {
             let (n_mu, n_az) = (200, 200);
             let mut sum = 0.0;
             for a in 0..n_mu {
                 let mu = -1.0 + (a as f64 + 0.5) * 2.0 / n_mu as f64;
                 let inc = mu.acos();
-                let obs = Observer::new(0.1, inc);
+                let obs = Observer::new(0.1, inc).with_limb_darkening(u);
+                // Limb darkening written out for this test: I(μ) ∝ 1 − u (1 − μ), normalised
+                // by its flux integral 2π ∫ I μ dμ = π (1 − u/3).
+                let ld = |m: f64| m * (1.0 - u * (1.0 - m)) / (1.0 - u / 3.0);
                 for b in 0..n_az {
                     let o = obs.direction((b as f64 + 0.5) / n_az as f64);
                     // Without the eclipse: the factor alone.
                     let f = match surface {
-                        Surface::Face => 2.0 * mu.abs(),
+                        Surface::Face => 2.0 * ld(mu.abs()),
                         Surface::Isotropic => 1.0,
                         Surface::Rim => {
-                            4.0 * ((x[0] * o[0] + x[1] * o[1]) / x[0].hypot(x[1])).max(0.0)
+                            4.0 * ld(((x[0] * o[0] + x[1] * o[1]) / x[0].hypot(x[1])).max(0.0))
                         }
                     };
                     let v = obs.visibility(x, surface, o);
@@ -220,8 +252,27 @@ mod tests {
                 }
             }
             let mean = sum / (n_mu * n_az) as f64;
-            assert!((mean - 1.0).abs() < 1e-3, "{surface:?}: {mean}");
+            assert!((mean - 1.0).abs() < 1e-3, "{surface:?}, u = {u}: {mean}");
         }
+    }
+
+    /// Limb darkening moves a face's light from grazing to face-on views: with u = 0.6 the
+    /// pole-on factor is 2 · 3/2.4 = 2.5 (Lambert: 2), and at OY Car's i = 83.3° (μ = 0.117)
+    /// it is 2.5 · 0.117 · 0.47 ≈ 0.137 against Lambert's 0.233 — 1.7 times fainter.
+    #[test]
+    fn limb_darkening_dims_the_grazing_view() {
+        let x = [0.3, 0.0, 0.0];
+        let face = |i: f64, u: f64| {
+            let obs = Observer::new(0.1, i.to_radians()).with_limb_darkening(u);
+            obs.visibility(x, Surface::Face, obs.direction(0.5))
+        };
+        assert!((face(0.0, 0.6) - 2.5).abs() < 1e-12);
+        assert!((face(0.0, 0.0) - 2.0).abs() < 1e-12);
+        let mu = 83.3f64.to_radians().cos();
+        assert!((face(83.3, 0.0) - 2.0 * mu).abs() < 1e-12);
+        let dark = face(83.3, 0.6);
+        assert!((dark - 2.5 * mu * (0.4 + 0.6 * mu)).abs() < 1e-12);
+        assert!(face(83.3, 0.0) / dark > 1.6, "{dark}");
     }
 
     #[test]

@@ -56,6 +56,12 @@ pub struct BinaryParams {
     /// randomly oriented orbits).
     #[serde(default = "default_inclination")]
     pub inclination: f64,
+    /// The linear limb-darkening coefficient u of the disk's faces and rim for
+    /// `l_observed`: intensity ∝ 1 − u (1 − μ), μ the cosine between the line of sight and
+    /// the surface's normal (`analysis::observer`; default 0, a Lambert radiator; ≈ 0.6 for
+    /// an optically thick disk in the optical).
+    #[serde(default)]
+    pub limb_darkening: f64,
 }
 
 fn default_inclination() -> f64 {
@@ -80,6 +86,7 @@ impl BinaryParams {
             accretor_radius: default_accretor_radius(),
             escape_radius: default_escape_radius(),
             inclination: default_inclination(),
+            limb_darkening: 0.0,
         }
     }
 
@@ -164,6 +171,12 @@ impl BinaryParams {
                 "key `binary.inclination`: degrees from 0 (pole-on) to 90 (edge-on), got {i}"
             ));
         }
+        let u = self.limb_darkening;
+        if !(0.0..=1.0).contains(&u) {
+            return Err(format!(
+                "key `binary.limb_darkening`: the linear limb-darkening coefficient lies in [0, 1], got {u}"
+            ));
+        }
         let e = self.escape_radius;
         if !(e > 1.0 && e.is_finite() && e <= 1e3) {
             return Err(format!(
@@ -197,7 +210,8 @@ impl Binary {
             omega: 1.0,
             accretor_radius: params.accretor_radius,
             escape_radius: params.escape_radius,
-            observer: Observer::new(q, params.inclination.to_radians()),
+            observer: Observer::new(q, params.inclination.to_radians())
+                .with_limb_darkening(params.limb_darkening),
         }
     }
 
@@ -460,6 +474,7 @@ mod tests {
             accretor_radius: 0.01,
             escape_radius: 2.5,
             inclination: 83.3,
+            limb_darkening: 0.0,
         };
         assert!(p.validate(3).is_ok());
         let u = p.physical_units().unwrap();
@@ -481,6 +496,7 @@ mod tests {
             accretor_radius: 0.01,
             escape_radius: 2.5,
             inclination: 83.3,
+            limb_darkening: 0.0,
         };
         assert!(p.validate(2).unwrap_err().contains("binary.q"));
         p.q = Some(0.1);
@@ -496,6 +512,12 @@ mod tests {
             assert!(p.validate(2).unwrap_err().contains("binary.inclination"));
         }
         p.inclination = 90.0;
+        assert!(p.validate(2).is_ok());
+        for bad in [-0.1, 1.5, f64::NAN] {
+            p.limb_darkening = bad;
+            assert!(p.validate(2).unwrap_err().contains("binary.limb_darkening"));
+        }
+        p.limb_darkening = 0.6;
         assert!(p.validate(2).is_ok());
         assert!(p.validate(1).unwrap_err().contains("dimension"));
         p.m1_msun = Some(0.7);
