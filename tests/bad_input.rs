@@ -457,6 +457,12 @@ fn bad_binaries_and_streams_are_named() {
         &["stream.mass_per_orbit=-1"],
         &["stream.mass_per_orbit", "-1"],
     );
+    assert_check_and_run_fail(
+        d.path(),
+        &cv,
+        &["binary.limb_darkening=1.5"],
+        &["binary.limb_darkening", "[0, 1]", "1.5"],
+    );
     // L1 lies 0.7175 a from the accretor at q = 0.1.
     assert_check_and_run_fail(
         d.path(),
