@@ -15,8 +15,9 @@
 //!
 //! - the disk: gas on near-circular orbits about the accretor (osculating eccentricity
 //!   below `physics::binary::STREAM_ECCENTRICITY`, as `problems::cv::is_disk`); its mass, the
-//!   radii holding 50% and 90% of it (R50, R90) and R90 over r_circ (Hessman & Hopp's fit),
-//!   the tidal radius 0.60/(1+q) and the 3:1 resonance radius; its eccentricity twice, as the
+//!   radii holding 50%, 90% and 99% of it (R50, R90, and R99 for its outer edge) and R90
+//!   over r_circ (Hessman & Hopp's fit), the tidal radius 0.60/(1+q) and the 3:1 resonance
+//!   radius; its eccentricity twice, as the
 //!   m = 1 Fourier amplitude of its mass ([`fourier_mode`], window [0.5, 1.0] R90, see
 //!   [`ECCENTRICITY_WINDOW`]) and as the mass-weighted mean osculating eccentricity vector in
 //!   the same window ([`mean_eccentricity`]) with its longitude of periastron (in the
@@ -103,6 +104,9 @@ pub struct CvFigures {
     pub disk_mass_fraction: Option<f64>,
     pub disk_radius_50: Option<f64>,
     pub disk_radius_90: Option<f64>,
+    /// The radius holding 99% of the disk's mass: its outer edge, for the comparison with
+    /// the tidal truncation radius.
+    pub disk_radius_99: Option<f64>,
     pub disk_r90_over_r_circ: Option<f64>,
     pub disk_r90_over_tidal: Option<f64>,
     pub disk_r90_over_r31: Option<f64>,
@@ -314,6 +318,7 @@ impl CvFigures {
             ("disk_mass_fraction", self.disk_mass_fraction),
             ("disk_radius_50", self.disk_radius_50),
             ("disk_radius_90", self.disk_radius_90),
+            ("disk_radius_99", self.disk_radius_99),
             ("disk_r90_over_r_circ", self.disk_r90_over_r_circ),
             ("disk_r90_over_tidal", self.disk_r90_over_tidal),
             ("disk_r90_over_r31", self.disk_r90_over_r31),
@@ -379,7 +384,7 @@ impl CvReport {
         );
         let _ = write!(
             s,
-            " orbit  disk N      R90  R90/rc  R90/rt  R90/r31   e(m=1)   e(osc)  ϖ(°)  spot(°)  R_spot  sector(°)  ballistic(°)"
+            " orbit  disk N      R90      R99  R90/rc  R90/rt  R90/r31   e(m=1)   e(osc)  ϖ(°)  spot(°)  R_spot  sector(°)  ballistic(°)"
         );
         if three_d {
             let _ = write!(s, "    H/R  overflow  R_re-impact  az_re-impact(°)");
@@ -396,10 +401,11 @@ impl CvReport {
         for r in &self.rows {
             let _ = write!(
                 s,
-                "{:6.2}  {:6}  {}  {}  {}  {}  {}  {}  {}  {}  {}  {}  {}",
+                "{:6.2}  {:6}  {}  {}  {}  {}  {}  {}  {}  {}  {}  {}  {}  {}",
                 r.orbit,
                 r.disk_particles,
                 f3(r.disk_radius_90, 7),
+                f3(r.disk_radius_99, 7),
                 f3(r.disk_r90_over_r_circ, 6),
                 f3(r.disk_r90_over_tidal, 6),
                 f3(r.disk_r90_over_r31, 7),
@@ -754,6 +760,7 @@ pub fn snapshot_figures(b: &Binary, s: &Snapshot, period_days: Option<f64>) -> C
     };
     f.disk_radius_50 = mass_radius(s, 0.5, |i| disk[i]);
     f.disk_radius_90 = Some(r90);
+    f.disk_radius_99 = mass_radius(s, 0.99, |i| disk[i]);
     f.disk_r90_over_r_circ = Some(r90 / roche::r_circ_fit(q));
     f.disk_r90_over_tidal = Some(r90 / roche::tidal_radius(q));
     f.disk_r90_over_r31 = Some(r90 / roche::r_31(q));
@@ -1053,6 +1060,8 @@ mod tests {
         assert!((r90 - 0.9f64.sqrt() * r_out).abs() < dr, "{r90}");
         let r50 = f.disk_radius_50.unwrap();
         assert!((r50 - 0.5f64.sqrt() * r_out).abs() < dr, "{r50}");
+        let r99 = f.disk_radius_99.unwrap();
+        assert!((r99 - 0.99f64.sqrt() * r_out).abs() < dr, "{r99}");
         assert!(
             f.disk_m1_amplitude.unwrap() < 1e-3,
             "{:?}",
