@@ -216,6 +216,7 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
         );
     }
     let mut rows = Vec::with_capacity(files.len());
+    let mut samples = Vec::with_capacity(files.len());
     for (name, _) in &files {
         let path = run.join(name);
         let snap = read_snapshot_with_h(&path)?.in_run_frame();
@@ -228,6 +229,14 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
         }
         let mut f = snapshot_figures(&b, &snap, period_days);
         f.snapshot.clone_from(name);
+        let disk = disk_mask(&b, &snap);
+        samples.push(cv_accretion::DiskSample {
+            orbit: f.orbit,
+            radius_mass: (0..snap.len())
+                .filter(|&i| disk[i])
+                .map(|i| (cylindrical_radius(&snap, i), snap.mass[i]))
+                .collect(),
+        });
         rows.push(f);
     }
     let csv = evolution_csv(&rows, period_days.is_some(), dimension == 3);
@@ -241,7 +250,10 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
             .with_context(|| format!("cannot read {}", monitor.display()))?;
         let ledger =
             cv_accretion::parse_ledger(&text).with_context(|| monitor.display().to_string())?;
-        cv_accretion::accretion_figures(&ledger, q)
+        cv_accretion::accretion_figures(&ledger, q).map(|mut a| {
+            a.viscosity = steady_viscosity(&b, &cfg.eos, &ledger, &mut samples);
+            a
+        })
     } else {
         None
     };
@@ -276,6 +288,43 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
     write_atomic(&json_path, format!("{text}\n").as_bytes())?;
     files.push(json_path);
     Ok(CvReport { json, rows, files })
+}
+
+/// Radial annuli of the steady disk's ν(R) between 1.5 R_in and r_circ.
+pub const VISCOSITY_BINS: usize = 8;
+
+/// The steady disk's viscosity (`reports::cv_accretion::steady_viscosity`) from the
+/// snapshots of the run's last quarter, where the white dwarf then accretes at least half
+/// the transfer rate.
+fn steady_viscosity(
+    b: &Binary,
+    eos: &crate::physics::eos::Eos,
+    ledger: &[cv_accretion::LedgerRow],
+    samples: &mut Vec<cv_accretion::DiskSample>,
+) -> Option<cv_accretion::SteadyViscosity> {
+    let end = samples.last()?.orbit;
+    let start = samples.first()?.orbit;
+    let from = end - 0.25 * (end - start);
+    samples.retain(|s| s.orbit >= from && s.orbit > start);
+    let (first, last) = (samples.first()?.orbit, samples.last()?.orbit);
+    let (mdot, share) = cv_accretion::accretion_rate(ledger, first, last)?;
+    if share < 0.5 {
+        return None;
+    }
+    let cs = match eos {
+        crate::physics::eos::Eos::Isothermal { cs } => Some(*cs),
+        _ => None,
+    };
+    cv_accretion::steady_viscosity(
+        samples,
+        mdot,
+        share,
+        b.accretor_radius,
+        (1.5 * b.accretor_radius, roche::r_circ_fit(b.q)),
+        VISCOSITY_BINS,
+        1.0 - b.mu,
+        cs,
+    )
 }
 
 /// `cv_evolution.csv`: a header and a row per snapshot, empty cells for missing figures.
@@ -460,6 +509,23 @@ impl CvReport {
                 at(a.accretion_half_orbit),
                 at(a.accretion_ninety_orbit)
             );
+            if let Some(v) = &a.viscosity {
+                let _ = writeln!(
+                    s,
+                    "the steady disk's viscosity (orbits {:.1}–{:.1}, {} snapshots, Ṁ = {:.3} of the transfer rate): ν = {:.3e} a² Ω_orb, α_eff = {:.3} (R, ν, α_eff: {})",
+                    v.orbits.0,
+                    v.orbits.1,
+                    v.snapshots,
+                    v.accretion_share,
+                    v.nu,
+                    v.alpha_eff,
+                    v.bins
+                        .iter()
+                        .map(|(r, _, nu, al)| format!("{r:.3} {nu:.2e} {al:.2}"))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                );
+            }
         }
         for r in &self.rows {
             for n in &r.notes {

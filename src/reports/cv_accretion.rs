@@ -15,6 +15,17 @@
 //!   which a steady disk's edge is expected (exact-solutions.md 4), and against r_3:1, past
 //!   which the disk turns eccentric where q ≲ 0.25.
 //!
+//! - the disk's viscosity from its steady state ([`steady_viscosity`]): inside the radius
+//!   where the stream's gas joins the disk, a steady disk carries the accretion rate Ṁ
+//!   inwards, and with no torque at its inner edge R_in its surface density is
+//!   Σ = Ṁ (1 − √(R_in/R)) / (3π ν) (Pringle 1981, Eq. 3.8 integrated; Frank, King & Raine
+//!   §5.3) — so ν(R) = Ṁ (1 − √(R_in/R)) / (3π Σ(R)), with Σ averaged over the snapshots of
+//!   the last quarter of the run and Ṁ the white dwarf's accretion rate over the same
+//!   stretch; for isothermal gas also α_eff = ν Ω_K / c_s², the α of a ν = α c_s H disk.
+//!   It measures all the viscosity the disk feels — the physical one of Eqs. (8)–(10) and
+//!   the shear viscosity of the artificial viscosity, α_AV c_s h / 8 in 2D (Murray 1996),
+//!   unless `artificial_viscosity.orbital` removes the Keplerian shear from it.
+//!
 //! Pure arithmetic on the rows; `reports::cv` reads the file and writes the figures into
 //! `cv.json` (key `accretion`), `cv_accretion.csv` and `cv_accretion.png`.
 
@@ -99,6 +110,111 @@ pub struct AccretionFigures {
     pub roche_lobe_09: f64,
     pub r_31: f64,
     pub r_disk_over_tidal: f64,
+    /// The viscosity the steady disk shows (`None` where the run is not long enough, or
+    /// the white dwarf accretes less than half the transfer rate over its last quarter).
+    pub viscosity: Option<SteadyViscosity>,
+}
+
+/// The fewest radial bins with gas for [`steady_viscosity`].
+pub const MIN_VISCOSITY_BINS: usize = 3;
+
+/// ν from the steady disk's Σ(R) and Ṁ (module doc).
+#[derive(Clone, Debug, Serialize)]
+pub struct SteadyViscosity {
+    /// The stretch (orbits) over which Σ and Ṁ were averaged, and the snapshots in it.
+    pub orbits: (f64, f64),
+    pub snapshots: usize,
+    /// Ṁ onto the white dwarf (mass per unit code time), and its ratio to the transfer
+    /// rate over the same stretch.
+    pub accretion_rate: f64,
+    pub accretion_share: f64,
+    /// (R, Σ, ν, α_eff) per radial bin from 1.5 R_in to the stream's circularisation
+    /// radius r_circ; α_eff is NaN (null) unless the gas is isothermal.
+    pub bins: Vec<(f64, f64, f64, f64)>,
+    /// The mass-weighted mean ν and α_eff over those bins.
+    pub nu: f64,
+    pub alpha_eff: f64,
+}
+
+/// The disk particles' cylindrical radii and masses of the snapshots averaged over.
+pub struct DiskSample {
+    pub orbit: f64,
+    pub radius_mass: Vec<(f64, f64)>,
+}
+
+/// ν(R) of a steady disk (module doc) between `r_lo` and `r_hi` in `bins` annuli, from the
+/// samples' mean Σ and the accretion rate `mdot` (mass per unit time); `gm` = G M1 and
+/// `cs` the isothermal sound speed (`None`: no α_eff). `None` with fewer than
+/// [`MIN_VISCOSITY_BINS`] annuli holding gas.
+#[allow(clippy::too_many_arguments)]
+pub fn steady_viscosity(
+    samples: &[DiskSample],
+    mdot: f64,
+    accretion_share: f64,
+    r_in: f64,
+    (r_lo, r_hi): (f64, f64),
+    bins: usize,
+    gm: f64,
+    cs: Option<f64>,
+) -> Option<SteadyViscosity> {
+    if samples.is_empty() || !(mdot > 0.0) || !(r_hi > r_lo) || bins == 0 {
+        return None;
+    }
+    let width = (r_hi - r_lo) / bins as f64;
+    let mut mass = vec![0.0; bins];
+    for s in samples {
+        for &(r, m) in &s.radius_mass {
+            let k = ((r - r_lo) / width).floor();
+            if k >= 0.0 && (k as usize) < bins {
+                mass[k as usize] += m;
+            }
+        }
+    }
+    let n = samples.len() as f64;
+    let mut out = Vec::new();
+    let (mut w, mut nu_sum, mut alpha_sum) = (0.0, 0.0, 0.0);
+    for (k, &m) in mass.iter().enumerate() {
+        if m <= 0.0 {
+            continue;
+        }
+        let (a, b) = (r_lo + k as f64 * width, r_lo + (k + 1) as f64 * width);
+        let r = 0.5 * (a + b);
+        let sigma = m / n / (std::f64::consts::PI * (b * b - a * a));
+        let nu = mdot * (1.0 - (r_in / r).sqrt()) / (3.0 * std::f64::consts::PI * sigma);
+        let omega = (gm / r.powi(3)).sqrt();
+        let alpha = cs.map_or(f64::NAN, |c| nu * omega / (c * c));
+        out.push((r, sigma, nu, alpha));
+        w += m;
+        nu_sum += m * nu;
+        alpha_sum += m * alpha;
+    }
+    if out.len() < MIN_VISCOSITY_BINS {
+        return None;
+    }
+    Some(SteadyViscosity {
+        orbits: (samples[0].orbit, samples[samples.len() - 1].orbit),
+        snapshots: samples.len(),
+        accretion_rate: mdot,
+        accretion_share,
+        bins: out,
+        nu: nu_sum / w,
+        alpha_eff: alpha_sum / w,
+    })
+}
+
+/// The white dwarf's accretion rate (mass per unit time) and its share of the transfer
+/// rate between orbits `from` and `to` (the rows nearest them).
+pub fn accretion_rate(rows: &[LedgerRow], from: f64, to: f64) -> Option<(f64, f64)> {
+    let at = |orbit: f64| -> &LedgerRow {
+        let k = rows.partition_point(|r| r.t / TAU < orbit - 1e-9);
+        &rows[k.min(rows.len() - 1)]
+    };
+    let (a, b) = (at(from), at(to));
+    let (dt, inj) = (b.t - a.t, b.injected - a.injected);
+    (dt > 0.0 && inj > 0.0).then(|| {
+        let acc = b.accreted - a.accreted;
+        (acc / dt, acc / inj)
+    })
 }
 
 /// The windows and figures of the rows (module doc); `None` with fewer than two windows'
@@ -161,6 +277,7 @@ pub fn accretion_figures(rows: &[LedgerRow], q: f64) -> Option<AccretionFigures>
         roche_lobe_09: 0.9 * roche::eggleton_radius(1.0 / q),
         r_31: roche::r_31(q),
         r_disk_over_tidal: last_window.r_disk_90 / tidal_radius,
+        viscosity: None,
         last: last_window,
         windows,
     })
@@ -335,6 +452,64 @@ mod tests {
         assert!((f.last.r_disk_90 - 0.46).abs() < 1e-3);
         assert!((f.tidal_radius - 0.6 / 1.1).abs() < 1e-12);
         assert!((f.r_disk_over_tidal - 0.46 / (0.6 / 1.1)).abs() < 2e-3);
+    }
+
+    /// A steady disk with ν = 2.4e-4 (the shear viscosity measured in cv2d_steady with the
+    /// artificial viscosity on shear) sampled by equal-mass particles placed at the radii
+    /// where its cumulative mass reaches (k + ½)/N: ν comes back to within the binning
+    /// (each of 10 annuli of 0.012 a holds ~100 particles of the 1000 in each of 4
+    /// snapshots; the mid-point Σ of a smooth profile is right to (Δr/R)² ~ 1%).
+    #[test]
+    fn the_viscosity_of_a_steady_disk_comes_back_from_its_surface_density() {
+        let (nu, mdot, r_in, gm, cs) = (2.4e-4, 1e-3 / TAU, 0.1, 1.0 / 1.1, 0.05);
+        let sigma = |r: f64| mdot * (1.0 - (r_in / r).sqrt()) / (3.0 * std::f64::consts::PI * nu);
+        // Cumulative mass on a fine grid from 0.1 to 0.3, then inverted.
+        let grid: Vec<f64> = (0..=20_000)
+            .map(|k| 0.1 + 0.2 * k as f64 / 20_000.0)
+            .collect();
+        let mut cum = vec![0.0];
+        for w in grid.windows(2) {
+            let r = 0.5 * (w[0] + w[1]);
+            cum.push(cum.last().unwrap() + sigma(r) * TAU * r * (w[1] - w[0]));
+        }
+        let total = *cum.last().unwrap();
+        let n = 1000;
+        let m = total / n as f64;
+        let radius_mass: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                let target = (k as f64 + 0.5) * m;
+                let j = cum.partition_point(|c| *c < target).min(grid.len() - 1);
+                (grid[j], m)
+            })
+            .collect();
+        let samples: Vec<DiskSample> = (0..4)
+            .map(|k| DiskSample {
+                orbit: 100.0 + k as f64,
+                radius_mass: radius_mass.clone(),
+            })
+            .collect();
+        let v =
+            steady_viscosity(&samples, mdot, 0.9, r_in, (0.15, 0.27), 10, gm, Some(cs)).unwrap();
+        assert_eq!(v.bins.len(), 10);
+        for &(r, _, nu_r, alpha) in &v.bins {
+            assert!((nu_r / nu - 1.0).abs() < 0.03, "R {r}: ν {nu_r}");
+            let expected = nu * (gm / r.powi(3)).sqrt() / (cs * cs);
+            assert!((alpha / expected - 1.0).abs() < 0.03, "R {r}: α {alpha}");
+        }
+        assert!((v.nu / nu - 1.0).abs() < 0.01, "{}", v.nu);
+        assert_eq!(v.orbits, (100.0, 103.0));
+        // Too few annuli with gas: no figure.
+        assert!(steady_viscosity(&samples, mdot, 0.9, r_in, (0.29, 0.5), 10, gm, None).is_none());
+    }
+
+    #[test]
+    fn the_accretion_rate_between_two_orbits_is_read_off_the_ledger() {
+        let rows = ledger(200.0, 30.0);
+        let (mdot, share) = accretion_rate(&rows, 150.0, 200.0).unwrap();
+        // 0.95 (1 − e^{−s/τ}) averaged over 150–200 orbits: 0.95 (1 − 30 (e^{−5} − e^{−20/3})/50).
+        let expected = 0.95 * (1.0 - 30.0 * ((-5.0f64).exp() - (-20.0f64 / 3.0).exp()) / 50.0);
+        assert!((share - expected).abs() < 1e-9, "{share} vs {expected}");
+        assert!((mdot - expected * 1e-6 / TAU).abs() < 1e-15);
     }
 
     #[test]
