@@ -504,7 +504,7 @@ impl CvReport {
             );
             let _ = writeln!(
                 s,
-                "accretion onto the white dwarf ({}-orbit windows): half the transfer rate {}, 90% {}",
+                "accretion onto the white dwarf ({:.1}-orbit windows): half the transfer rate {}, 90% {}",
                 a.window_orbits,
                 at(a.accretion_half_orbit),
                 at(a.accretion_ninety_orbit)

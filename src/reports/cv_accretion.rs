@@ -345,7 +345,7 @@ pub fn panels(f: &AccretionFigures) -> Vec<Panel> {
     vec![
         Panel {
             title: format!(
-                "where the stream's gas goes ({}-orbit windows)",
+                "where the stream's gas goes ({:.1}-orbit windows)",
                 f.window_orbits
             ),
             x_label: "orbit (t / P_orb)".into(),
