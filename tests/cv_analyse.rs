@@ -81,10 +81,6 @@ fn a_short_cv_run_gives_its_disk_and_bright_spot() {
     for line in windows.lines().skip(1) {
         let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
         assert!((v[3] + v[4] + v[5] + v[6] - 1.0).abs() < 1e-5, "{line}");
-        assert!(
-            v[7] <= v[6] + 1e-6,
-            "the disk's growth exceeds the particles' {line}"
-        );
     }
     let png = std::fs::read(out.join("cv_accretion.png")).unwrap();
     assert!(png.starts_with(b"\x89PNG"));
