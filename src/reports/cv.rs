@@ -227,9 +227,9 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
                 snap.dimension
             );
         }
-        let mut f = snapshot_figures(&b, &snap, period_days);
-        f.snapshot.clone_from(name);
         let disk = disk_mask(&b, &snap);
+        let mut f = snapshot_figures_of_disk(&b, &snap, period_days, &disk);
+        f.snapshot.clone_from(name);
         samples.push(cv_accretion::DiskSample {
             orbit: f.orbit,
             radius_mass: (0..snap.len())
@@ -795,6 +795,16 @@ pub fn overflow_figures(
 /// Everything [`CvFigures`] holds for one snapshot `s` in the run's frame (its `snapshot`
 /// name left empty).
 pub fn snapshot_figures(b: &Binary, s: &Snapshot, period_days: Option<f64>) -> CvFigures {
+    snapshot_figures_of_disk(b, s, period_days, &disk_mask(b, s))
+}
+
+/// [`snapshot_figures`] with the disk's mask ([`disk_mask`]) given.
+fn snapshot_figures_of_disk(
+    b: &Binary,
+    s: &Snapshot,
+    period_days: Option<f64>,
+    disk: &[bool],
+) -> CvFigures {
     let q = b.q;
     let mut f = CvFigures {
         t: s.time,
@@ -804,7 +814,6 @@ pub fn snapshot_figures(b: &Binary, s: &Snapshot, period_days: Option<f64>) -> C
         gas_mass: s.mass.iter().fold(0.0, |acc, m| acc + m),
         ..CvFigures::default()
     };
-    let disk = disk_mask(b, s);
     f.disk_particles = disk.iter().filter(|&&d| d).count();
     // fold from +0 (an empty f64 sum is −0).
     f.disk_mass = (0..s.len())

@@ -205,11 +205,10 @@ pub fn steady_viscosity(
 /// The white dwarf's accretion rate (mass per unit time) and its share of the transfer
 /// rate between orbits `from` and `to` (the rows nearest them).
 pub fn accretion_rate(rows: &[LedgerRow], from: f64, to: f64) -> Option<(f64, f64)> {
-    let at = |orbit: f64| -> &LedgerRow {
-        let k = rows.partition_point(|r| r.t / TAU < orbit - 1e-9);
-        &rows[k.min(rows.len() - 1)]
-    };
-    let (a, b) = (at(from), at(to));
+    if rows.is_empty() {
+        return None;
+    }
+    let (a, b) = (&rows[row_at(rows, from)], &rows[row_at(rows, to)]);
     let (dt, inj) = (b.t - a.t, b.injected - a.injected);
     (dt > 0.0 && inj > 0.0).then(|| {
         let acc = b.accreted - a.accreted;
@@ -229,10 +228,7 @@ pub fn accretion_figures(rows: &[LedgerRow], q: f64) -> Option<AccretionFigures>
     let count = (span / width).floor() as usize;
     // Windows end at the last row and are laid back from it, so the last is always full.
     let t_end = last.t / TAU;
-    let at = |orbit: f64| -> usize {
-        rows.partition_point(|r| r.t / TAU < orbit - 1e-9)
-            .min(rows.len() - 1)
-    };
+    let at = |orbit: f64| row_at(rows, orbit);
     let mut windows = Vec::with_capacity(count);
     for k in (0..count).rev() {
         let (o0, o1) = (t_end - (k + 1) as f64 * width, t_end - k as f64 * width);
@@ -281,6 +277,13 @@ pub fn accretion_figures(rows: &[LedgerRow], q: f64) -> Option<AccretionFigures>
         last: last_window,
         windows,
     })
+}
+
+/// The index of the first row at or after `orbit` (the last row if none is); `rows` is not
+/// empty and sorted by time.
+fn row_at(rows: &[LedgerRow], orbit: f64) -> usize {
+    rows.partition_point(|r| r.t / TAU < orbit - 1e-9)
+        .min(rows.len() - 1)
 }
 
 /// `cv_accretion.csv`: a header and a row per window.
