@@ -901,7 +901,7 @@ fn snapshot_figures_of_disk(
         )),
     }
     if s.dimension == 3 {
-        f.overflow = Some(overflow_figures(b, s, &disk, r90, &mut f.notes));
+        f.overflow = Some(overflow_figures(b, s, disk, r90, &mut f.notes));
     }
     f
 }
