@@ -53,6 +53,8 @@ pub struct LedgerRow {
     pub accreted: f64,
     pub returned: f64,
     pub escaped: f64,
+    /// The mass on the hot branch of `[outbursts]` (0 without it).
+    pub hot_mass: f64,
 }
 
 /// Parses `monitor.csv` (header `io::timeseries::MONITOR_HEADER`), keeping the rows of the
@@ -70,6 +72,7 @@ pub fn parse_ledger(text: &str) -> anyhow::Result<Vec<LedgerRow>> {
                 accreted: v[7],
                 returned: v[8],
                 escaped: v[9],
+                hot_mass: v[10],
             });
     Ok(crate::io::timeseries::supersede(rows, |r| r.t))
 }
@@ -424,6 +427,7 @@ mod tests {
                     accreted,
                     returned,
                     escaped: 0.0,
+                    hot_mass: 0.0,
                 }
             })
             .collect()

@@ -71,16 +71,15 @@ pub struct MonitorRow {
 /// Parses `monitor.csv` (header `io::timeseries::MONITOR_HEADER`), keeping the rows of the
 /// latest pass through each time (a resumed run).
 pub fn parse_monitor(text: &str) -> Result<Vec<MonitorRow>> {
-    let rows =
-        crate::io::timeseries::parse_series(text, crate::io::timeseries::MONITOR_HEADER, false)?
-            .into_iter()
-            .map(|v| MonitorRow {
-                t: v[0],
-                disk_mass: v[4],
-                r_disk: v[5],
-                hot_mass: v[10],
-            });
-    Ok(crate::io::timeseries::supersede(rows, |r| r.t))
+    Ok(crate::reports::cv_accretion::parse_ledger(text)?
+        .into_iter()
+        .map(|r| MonitorRow {
+            t: r.t,
+            disk_mass: r.disk_mass,
+            r_disk: r.r_disk,
+            hot_mass: r.hot_mass,
+        })
+        .collect())
 }
 
 /// One outburst.
