@@ -159,7 +159,8 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     // The peak memory of the steps, before the count below builds a working set of its own.
     let peak_rss = peak_rss_bytes();
     // The last evaluation's positions are the particles' (the final kick moves none).
-    let tested = candidates(&Local::build(&p, &bx, phys.kernel.support()));
+    let support = phys.kernel.support();
+    let tested = candidates(&Local::build(&p, &bx, support), support);
     let candidates_per_pair = tested as f64 / last_pairs.max(1) as f64;
     let cost = sweep_cost::<3>(&Setting::of(&phys, candidates_per_pair));
     Ok(BenchResult {

@@ -8,6 +8,8 @@
 //! binary's stream and disk, a particle flung far out — costs memory and time in proportion
 //! to the particles, not to its volume.
 
+use rayon::prelude::*;
+
 use crate::boundary::{BoundaryKind, SimBox};
 
 /// A uniform grid; every cell side is ≥ the kernel support, so all partners of a particle lie
@@ -117,10 +119,13 @@ impl<const D: usize> Grid<D> {
             );
         }
         let keys: Vec<u64> = (0..n)
+            .into_par_iter()
+            .with_min_len(4096)
             .map(|i| self.key(self.coords(std::array::from_fn(|d| pos[d][i]))))
             .collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        order.sort_by_key(|&i| keys[i as usize]);
+        // Stable, as the dense counting sort.
+        order.par_sort_by_key(|&i| keys[i as usize]);
         let mut occupied = Vec::new();
         let mut start = Vec::new();
         for (k, &o) in order.iter().enumerate() {
@@ -153,6 +158,8 @@ impl<const D: usize> Grid<D> {
     pub fn sort(&self, pos: &[Vec<f64>; D]) -> (Vec<u32>, Vec<u32>) {
         let n = pos[0].len();
         let keys: Vec<u32> = (0..n)
+            .into_par_iter()
+            .with_min_len(4096)
             .map(|i| self.index(self.coords(std::array::from_fn(|d| pos[d][i]))) as u32)
             .collect();
         let mut start = vec![0u32; self.num_cells() + 1];

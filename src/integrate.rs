@@ -10,6 +10,8 @@
 //! 5. kick:  v ← v_half + a Δt/2, u ← u_half + (du/dt) Δt/2;
 //! 6. with the artificial-viscosity switch, each particle's α over Δt (`physics::av_switch`).
 
+use rayon::prelude::*;
+
 use crate::boundary::SimBox;
 use crate::particles::Particles;
 use crate::physics::av_switch::{AvSwitch, SwitchKind};
@@ -83,13 +85,23 @@ pub fn add_gravity<const D: usize>(p: &mut Particles<D>, phys: &Physics<D>) {
     if phys.gravity.is_none() && phys.binary.is_none() {
         return;
     }
-    for i in 0..p.len() {
-        let a = external_acceleration(phys, &p.position(i));
-        for d in 0..D {
-            p.acc[d][i] += a[d];
-        }
+    let pos = &p.pos;
+    let a: Vec<[f64; D]> = (0..p.len())
+        .into_par_iter()
+        .with_min_len(GRAIN)
+        .map(|i| external_acceleration(phys, &std::array::from_fn(|d| pos[d][i])))
+        .collect();
+    for d in 0..D {
+        p.acc[d]
+            .par_iter_mut()
+            .zip(a.par_iter())
+            .with_min_len(GRAIN)
+            .for_each(|(acc, a)| *acc += a[d]);
     }
 }
+
+/// Particles per task in the integrator's parallel loops.
+const GRAIN: usize = 4096;
 
 /// v ← v_half + a Δt/2 and, if the energy is evolved, u ← u_half + (du/dt) Δt/2.
 fn half_kick<const D: usize>(
@@ -99,15 +111,17 @@ fn half_kick<const D: usize>(
     half: f64,
     evolve_u: bool,
 ) {
+    let kick = |x: &mut [f64], half_step: &[f64], rate: &[f64]| {
+        x.par_iter_mut()
+            .zip(half_step.par_iter().zip(rate.par_iter()))
+            .with_min_len(GRAIN)
+            .for_each(|(x, (&h, &r))| *x = h + half * r);
+    };
     for d in 0..D {
-        for i in 0..p.len() {
-            p.vel[d][i] = v_half[d][i] + half * p.acc[d][i];
-        }
+        kick(&mut p.vel[d], &v_half[d], &p.acc[d]);
     }
     if evolve_u {
-        for i in 0..p.len() {
-            p.u[i] = u_half[i] + half * p.du[i];
-        }
+        kick(&mut p.u, u_half, &p.du);
     }
 }
 
@@ -119,21 +133,36 @@ pub fn time_step<const D: usize>(
     ctl: &StepControl,
     evolve_u: bool,
 ) -> f64 {
+    // The minimum is exact in any order: the same step on any number of threads.
+    (0..p.len())
+        .into_par_iter()
+        .with_min_len(GRAIN)
+        .map(|i| particle_time_step(p, i, h, ctl, evolve_u))
+        .reduce(|| f64::INFINITY, f64::min)
+}
+
+/// Particle `i`'s limit on the step ([`time_step`]).
+#[inline]
+fn particle_time_step<const D: usize>(
+    p: &Particles<D>,
+    i: usize,
+    h: f64,
+    ctl: &StepControl,
+    evolve_u: bool,
+) -> f64 {
     let mut dt = f64::INFINITY;
-    for i in 0..p.len() {
-        if p.vsig[i] > 0.0 {
-            dt = dt.min(ctl.courant * h / p.vsig[i]);
-        }
-        let a2: f64 = (0..D).map(|d| p.acc[d][i] * p.acc[d][i]).sum();
-        if a2 > 0.0 {
-            dt = dt.min(ctl.force * (h / a2.sqrt()).sqrt());
-        }
-        if evolve_u && p.du[i] < 0.0 && p.u[i] > 0.0 {
-            dt = dt.min(ctl.energy * p.u[i] / -p.du[i]);
-        }
-        if p.nu[i] > 0.0 {
-            dt = dt.min(ctl.viscous * h * h / p.nu[i]);
-        }
+    if p.vsig[i] > 0.0 {
+        dt = dt.min(ctl.courant * h / p.vsig[i]);
+    }
+    let a2: f64 = (0..D).map(|d| p.acc[d][i] * p.acc[d][i]).sum();
+    if a2 > 0.0 {
+        dt = dt.min(ctl.force * (h / a2.sqrt()).sqrt());
+    }
+    if evolve_u && p.du[i] < 0.0 && p.u[i] > 0.0 {
+        dt = dt.min(ctl.energy * p.u[i] / -p.du[i]);
+    }
+    if p.nu[i] > 0.0 {
+        dt = dt.min(ctl.viscous * h * h / p.nu[i]);
     }
     dt
 }
@@ -160,22 +189,28 @@ pub fn kdk_step_with<const D: usize>(
 ) -> SweepStats {
     let evolve_u = phys.eos.evolves_energy();
     let half = 0.5 * dt;
-    let n = p.len();
     // In a binary's turning frame the kicks act on the inertial velocity (module doc of
     // `physics::binary`): corotating → inertial here, back at the end of the step.
     if let Some(b) = &phys.binary {
         b.add_frame_velocity(&p.pos, &mut p.vel, 1.0);
     }
-    let mut v_half: [Vec<f64>; D] = std::array::from_fn(|_| Vec::with_capacity(n));
+    let half_step = |x: &[f64], rate: &[f64]| -> Vec<f64> {
+        x.par_iter()
+            .zip(rate.par_iter())
+            .with_min_len(GRAIN)
+            .map(|(&x, &r)| x + half * r)
+            .collect()
+    };
+    let mut v_half: [Vec<f64>; D] = std::array::from_fn(|d| half_step(&p.vel[d], &p.acc[d]));
     for d in 0..D {
-        for i in 0..n {
-            let v = p.vel[d][i] + half * p.acc[d][i];
-            v_half[d].push(v);
-            p.pos[d][i] += v * dt;
-        }
+        p.pos[d]
+            .par_iter_mut()
+            .zip(v_half[d].par_iter())
+            .with_min_len(GRAIN)
+            .for_each(|(x, &v)| *x += v * dt);
     }
     let u_half: Vec<f64> = if evolve_u {
-        (0..n).map(|i| p.u[i] + half * p.du[i]).collect()
+        half_step(&p.u, &p.du)
     } else {
         p.u.clone()
     };
@@ -212,20 +247,23 @@ pub fn kdk_step_with<const D: usize>(
     }
     if evolve_u {
         // Pressure and sound speed from the corrected energy (density is unchanged).
-        for i in 0..n {
-            let (pr, cs) = match pe_gamma {
-                Some(gamma) => {
-                    let pr = rescaled_pressure(p.p[i], u_eval[i], p.u[i]);
-                    (pr, sound_speed(gamma, pr, p.rho[i]))
-                }
-                None => {
-                    let radius = cylindrical_radius(&p.position(i));
-                    phys.eos.pressure_sound_speed(p.rho[i], p.u[i], radius)
-                }
-            };
-            p.p[i] = pr;
-            p.cs[i] = cs;
-        }
+        let (pos, rho, u) = (&p.pos, &p.rho, &p.u);
+        p.p.par_iter_mut()
+            .zip(p.cs.par_iter_mut())
+            .enumerate()
+            .with_min_len(GRAIN)
+            .for_each(|(i, (p_i, cs_i))| {
+                (*p_i, *cs_i) = match pe_gamma {
+                    Some(gamma) => {
+                        let pr = rescaled_pressure(*p_i, u_eval[i], u[i]);
+                        (pr, sound_speed(gamma, pr, rho[i]))
+                    }
+                    None => {
+                        let radius = cylindrical_radius::<D>(&std::array::from_fn(|d| pos[d][i]));
+                        phys.eos.pressure_sound_speed(rho[i], u[i], radius)
+                    }
+                };
+            });
     }
     stats
 }

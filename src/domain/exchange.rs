@@ -506,12 +506,7 @@ pub fn evaluate<const D: usize>(
     for (k, &e) in local.element.iter().enumerate() {
         local_of_elem[e as usize] = k as u32;
     }
-    let mut local_of_real = vec![0u32; n_real];
-    for k in 0..local.len() {
-        if !local.is_ghost[k] {
-            local_of_real[local.src[k] as usize] = k as u32;
-        }
-    }
+    let local_of_real = &local.real_at;
     let ns = local.num_slabs();
     let mut export_slab = vec![false; ns];
     let mut import_slab = vec![false; ns];
@@ -563,6 +558,7 @@ pub fn evaluate<const D: usize>(
     );
     wait += sweep_stats.times.wait;
     write_back(parts, &local, &work);
+    crate::memory::keep_vec(work);
     ExchangeStats {
         sweep: SweepStats {
             ghosts: local.num_ghosts(),

@@ -106,7 +106,7 @@ pub struct PairForce<const D: usize> {
 /// v_sig,u = √(|p_i − p_j| / ρ̄_ij) (or |v_ij·r̂_ij|, `av.conductivity_signal`),
 /// ρ̄_ij = (ρ_i + ρ_j)/2; j gets the opposite, so the pair
 /// exchanges heat without changing the total energy.
-#[inline]
+#[inline(always)]
 pub fn force_pair<const D: usize>(
     dx: &[f64; D],
     r: f64,

@@ -1,6 +1,8 @@
 //! The working set of one evaluation: real particles and their ghosts, copied in cell order
 //! (x-major, so every x-slab is a contiguous range), with the per-particle accumulators.
 
+use rayon::prelude::*;
+
 use crate::boundary::{Ghost, SimBox, make_ghosts};
 use crate::grid::{CellIndex, Grid};
 use crate::particles::{Particles, retain_by};
@@ -199,6 +201,9 @@ pub struct Local<const D: usize> {
     pub class: Vec<u8>,
     /// Position of each local particle in the [`Elements`] it was built from.
     pub element: Vec<u32>,
+    /// Local index of each of this rank's reals, in store order (the inverse of `src` over
+    /// the reals).
+    pub real_at: Vec<u32>,
     /// ±1 per axis: a ghost's vectors are its owner's times `sign`.
     pub sign: Vec<[f64; D]>,
     pub pos: [Vec<f64>; D],
@@ -223,6 +228,14 @@ pub struct Local<const D: usize> {
     pub stress: Vec<[[f64; D]; D]>,
 }
 
+/// The largest arrays go back to `memory`'s pool for the next evaluation.
+impl<const D: usize> Drop for Local<D> {
+    fn drop(&mut self) {
+        crate::memory::keep_vec(std::mem::take(&mut self.vgrad));
+        crate::memory::keep_vec(std::mem::take(&mut self.stress));
+    }
+}
+
 impl<const D: usize> Local<D> {
     /// Makes the ghosts, builds the grid over reals and ghosts, and copies both in cell order.
     pub fn build(parts: &Particles<D>, bx: &SimBox<D>, support: f64) -> Self {
@@ -231,27 +244,35 @@ impl<const D: usize> Local<D> {
         Self::from_elements(e, grid)
     }
 
-    /// Sorts `e` into the cells of `grid`.
+    /// Sorts `e` into the cells of `grid` (the copies in parallel: every array is a gather
+    /// through the cell order).
     pub fn from_elements(e: Elements<D>, grid: Grid<D>) -> Self {
         let n = e.n_real;
         let (order, cells) = grid.index_particles(&e.pos);
         let total = order.len();
-        let mut local_of_real = vec![0u32; n];
+        let mut real_at = vec![0u32; n];
         let cell = cells.keys_in_order();
         for (k, &o) in order.iter().enumerate() {
             if (o as usize) < n {
-                local_of_real[o as usize] = k as u32;
+                real_at[o as usize] = k as u32;
             }
         }
-        let pick = |v: &[f64]| -> Vec<f64> { order.iter().map(|&o| v[o as usize]).collect() };
-        let src: Vec<u32> = order.iter().map(|&o| e.src[o as usize]).collect();
+        fn pick<T: Copy + Send + Sync>(order: &[u32], v: &[T]) -> Vec<T> {
+            order
+                .par_iter()
+                .with_min_len(4096)
+                .map(|&o| v[o as usize])
+                .collect()
+        }
+        let src: Vec<u32> = pick(&order, &e.src);
         let owner = src
-            .iter()
+            .par_iter()
+            .with_min_len(4096)
             .map(|&s| {
                 if s == REMOTE {
                     REMOTE
                 } else {
-                    local_of_real[s as usize]
+                    real_at[s as usize]
                 }
             })
             .collect();
@@ -260,24 +281,29 @@ impl<const D: usize> Local<D> {
             cells,
             cell,
             owner,
-            is_ghost: order.iter().map(|&o| o as usize >= n).collect(),
-            fold: order.iter().map(|&o| e.fold[o as usize]).collect(),
-            class: order.iter().map(|&o| e.class[o as usize]).collect(),
-            sign: order.iter().map(|&o| e.sign[o as usize]).collect(),
-            pos: std::array::from_fn(|d| pick(&e.pos[d])),
-            vel: std::array::from_fn(|d| pick(&e.vel[d])),
-            mass: pick(&e.mass),
-            u: pick(&e.u),
+            is_ghost: order
+                .par_iter()
+                .with_min_len(4096)
+                .map(|&o| o as usize >= n)
+                .collect(),
+            fold: pick(&order, &e.fold),
+            class: pick(&order, &e.class),
+            sign: pick(&order, &e.sign),
+            pos: std::array::from_fn(|d| pick(&order, &e.pos[d])),
+            vel: std::array::from_fn(|d| pick(&order, &e.vel[d])),
+            mass: pick(&order, &e.mass),
+            u: pick(&order, &e.u),
             src,
             element: order,
+            real_at,
             v_av: Vec::new(),
             rho: vec![0.0; total],
             p: vec![0.0; total],
             cs: vec![0.0; total],
             av_scale: vec![1.0; total],
-            vgrad: vec![[[0.0; D]; D]; total],
+            vgrad: crate::memory::filled_vec(total, [[0.0; D]; D]),
             nu: vec![0.0; total],
-            stress: vec![[[0.0; D]; D]; total],
+            stress: crate::memory::filled_vec(total, [[0.0; D]; D]),
         }
     }
 

@@ -318,6 +318,7 @@ pub fn evaluate<const D: usize>(
     stats.times.build += build;
     let c = Instant::now();
     write_back(parts, &local, &work);
+    crate::memory::keep_vec(work);
     stats.times.finish += c.elapsed().as_secs_f64();
     stats
 }
@@ -332,7 +333,7 @@ pub fn sweep<const D: usize>(
 ) -> (Vec<Work<D>>, SweepStats) {
     let clock = Instant::now();
     set_av_velocities(local, phys);
-    let mut work = vec![Work::<D>::default(); local.len()];
+    let mut work = crate::memory::filled_vec(local.len(), Work::<D>::default());
     let deps = Dependencies::new(local);
     let ns = local.num_slabs();
     let mut blocks: Vec<Option<PairBlock>> = (0..ns).map(|_| None).collect();
@@ -496,46 +497,7 @@ fn finish_slab<const D: usize>(
             }
         }
     }
-    let h = phys.kernel.h();
-    for k in local.slab_range(t) {
-        if local.is_ghost[k] {
-            continue;
-        }
-        match stage {
-            DENSITY => {
-                let rho = work[k].rho + local.mass[k] * phys.kernel.w0();
-                let (p, cs) = match phys.pressure_energy_gamma() {
-                    Some(gamma) => smoothed_pressure(
-                        gamma,
-                        work[k].mu_w,
-                        local.mass[k],
-                        local.u[k],
-                        phys.kernel.w0(),
-                        rho,
-                    ),
-                    None => {
-                        let radius = cylindrical_radius(&local.position(k));
-                        phys.eos.pressure_sound_speed(rho, local.u[k], radius)
-                    }
-                };
-                local.rho[k] = rho;
-                local.p[k] = p;
-                local.cs[k] = cs;
-            }
-            GRADIENT => {
-                local.vgrad[k] = work[k].grad;
-                if phys.av.balsara {
-                    local.av_scale[k] *= balsara_factor(&local.vgrad[k], local.cs[k], h);
-                }
-                if phys.viscous() {
-                    let nu = phys.nu(local.cs[k], cylindrical_radius(&local.position(k)));
-                    local.nu[k] = nu;
-                    local.stress[k] = phys.viscosity.stress(&local.vgrad[k], nu);
-                }
-            }
-            _ => {}
-        }
-    }
+    finish_reals(local, work, phys, local.slab_range(t), stage);
     for &g in ghosts {
         let g = g as usize;
         let o = local.owner[g] as usize;
@@ -560,6 +522,74 @@ fn finish_slab<const D: usize>(
     }
 }
 
+/// Completes the quantities of stage `stage` of the reals in `range` (in parallel: each
+/// particle reads only its own sums and state).
+fn finish_reals<const D: usize>(
+    local: &mut Local<D>,
+    work: &[Work<D>],
+    phys: &Physics<D>,
+    range: std::ops::Range<usize>,
+    stage: u8,
+) {
+    const GRAIN: usize = 512;
+    let (start, end) = (range.start, range.end);
+    let is_ghost = &local.is_ghost[start..end];
+    let pos = &local.pos;
+    let radius = |k: usize| cylindrical_radius::<D>(&std::array::from_fn(|d| pos[d][k]));
+    let work = &work[start..end];
+    match stage {
+        DENSITY => {
+            let w0 = phys.kernel.w0();
+            let (mass, u) = (&local.mass[start..end], &local.u[start..end]);
+            local.rho[start..end]
+                .par_iter_mut()
+                .zip(local.p[start..end].par_iter_mut())
+                .zip(local.cs[start..end].par_iter_mut())
+                .enumerate()
+                .with_min_len(GRAIN)
+                .for_each(|(o, ((rho_k, p_k), cs_k))| {
+                    if is_ghost[o] {
+                        return;
+                    }
+                    let rho = work[o].rho + mass[o] * w0;
+                    let (p, cs) = match phys.pressure_energy_gamma() {
+                        Some(gamma) => {
+                            smoothed_pressure(gamma, work[o].mu_w, mass[o], u[o], w0, rho)
+                        }
+                        None => phys.eos.pressure_sound_speed(rho, u[o], radius(start + o)),
+                    };
+                    (*rho_k, *p_k, *cs_k) = (rho, p, cs);
+                });
+        }
+        GRADIENT => {
+            let h = phys.kernel.h();
+            let cs = &local.cs[start..end];
+            local.vgrad[start..end]
+                .par_iter_mut()
+                .zip(local.av_scale[start..end].par_iter_mut())
+                .zip(local.nu[start..end].par_iter_mut())
+                .zip(local.stress[start..end].par_iter_mut())
+                .enumerate()
+                .with_min_len(GRAIN)
+                .for_each(|(o, (((vgrad, av_scale), nu_k), stress))| {
+                    if is_ghost[o] {
+                        return;
+                    }
+                    *vgrad = work[o].grad;
+                    if phys.av.balsara {
+                        *av_scale *= balsara_factor(vgrad, cs[o], h);
+                    }
+                    if phys.viscous() {
+                        let nu = phys.nu(cs[o], radius(start + o));
+                        *nu_k = nu;
+                        *stress = phys.viscosity.stress(vgrad, nu);
+                    }
+                });
+        }
+        _ => {}
+    }
+}
+
 /// With `artificial_viscosity.orbital`, every element's velocity relative to its circular
 /// orbit, once per evaluation (positions and velocities are fixed during it, copies
 /// included), rather than twice per pair.
@@ -581,29 +611,66 @@ fn set_av_velocities<const D: usize>(local: &mut Local<D>, phys: &Physics<D>) {
     }
 }
 
-/// Copies the finished quantities of this rank's reals from the working set into `parts`.
+/// Copies the finished quantities of this rank's reals from the working set into `parts`, in
+/// parallel over blocks of the store: each task writes one block of every array, reading
+/// each particle's working-set record once.
 pub fn write_back<const D: usize>(parts: &mut Particles<D>, local: &Local<D>, work: &[Work<D>]) {
-    for k in 0..local.len() {
-        if local.is_ghost[k] {
-            continue;
-        }
-        let i = local.src[k] as usize;
-        let w = &work[k];
-        parts.rho[i] = local.rho[k];
-        parts.p[i] = local.p[k];
-        parts.cs[i] = local.cs[k];
-        for a in 0..D {
-            parts.acc[a][i] = w.acc[a];
-            for b in 0..D {
-                parts.vgrad[a][b][i] = local.vgrad[k][a][b];
-            }
-        }
-        parts.du[i] = w.du;
-        parts.diss[i] = w.diss;
-        parts.vsig[i] = w.vsig.max(2.0 * local.cs[k]);
-        parts.nu[i] = local.nu[k];
-        parts.interactions[i] = w.interactions;
+    const BLOCK: usize = 4096;
+    let at = &local.real_at;
+    debug_assert_eq!(at.len(), parts.len());
+    // The store's f64 arrays, in this order: rho, p, cs, du, diss, vsig, nu, acc[a],
+    // vgrad[a][b]; cut into blocks, one row of blocks per task.
+    let mut columns: Vec<std::slice::ChunksMut<'_, f64>> = vec![
+        parts.rho.chunks_mut(BLOCK),
+        parts.p.chunks_mut(BLOCK),
+        parts.cs.chunks_mut(BLOCK),
+        parts.du.chunks_mut(BLOCK),
+        parts.diss.chunks_mut(BLOCK),
+        parts.vsig.chunks_mut(BLOCK),
+        parts.nu.chunks_mut(BLOCK),
+    ];
+    columns.extend(parts.acc.iter_mut().map(|v| v.chunks_mut(BLOCK)));
+    columns.extend(
+        parts
+            .vgrad
+            .iter_mut()
+            .flatten()
+            .map(|v| v.chunks_mut(BLOCK)),
+    );
+    let mut rows: Vec<(Vec<&mut [f64]>, &mut [u32])> = Vec::new();
+    for inter in parts.interactions.chunks_mut(BLOCK) {
+        let row = columns.iter_mut().map(|c| c.next().expect("equal lengths"));
+        rows.push((row.collect(), inter));
     }
+    rows.into_par_iter()
+        .enumerate()
+        .for_each(|(t, (mut row, inter))| {
+            for o in 0..inter.len() {
+                let k = at[t * BLOCK + o] as usize;
+                let w = &work[k];
+                let cs = local.cs[k];
+                let scalars = [
+                    local.rho[k],
+                    local.p[k],
+                    cs,
+                    w.du,
+                    w.diss,
+                    w.vsig.max(2.0 * cs),
+                    local.nu[k],
+                ];
+                for (c, x) in scalars.into_iter().enumerate() {
+                    row[c][o] = x;
+                }
+                let g = &local.vgrad[k];
+                for a in 0..D {
+                    row[7 + a][o] = w.acc[a];
+                    for b in 0..D {
+                        row[7 + D + a * D + b][o] = g[a][b];
+                    }
+                }
+                inter[o] = w.interactions;
+            }
+        });
 }
 
 /// Every pair the sweep's blocks find, as (i, j) local indices, slab by slab (for tests and
@@ -612,9 +679,9 @@ pub fn all_pairs<const D: usize>(local: &Local<D>, kernel: &Kernel<D>) -> Vec<(u
     (0..local.num_slabs())
         .flat_map(|s| {
             PairBlock::find(local, kernel, s)
-                .pairs
-                .into_iter()
+                .pairs()
                 .map(|p| (p.i, p.j))
+                .collect::<Vec<_>>()
         })
         .collect()
 }
