@@ -85,11 +85,10 @@ pub fn add_gravity<const D: usize>(p: &mut Particles<D>, phys: &Physics<D>) {
     if phys.gravity.is_none() && phys.binary.is_none() {
         return;
     }
-    let pos = &p.pos;
     let a: Vec<[f64; D]> = (0..p.len())
         .into_par_iter()
         .with_min_len(GRAIN)
-        .map(|i| external_acceleration(phys, &std::array::from_fn(|d| pos[d][i])))
+        .map(|i| external_acceleration(phys, &p.position(i)))
         .collect();
     for d in 0..D {
         p.acc[d]

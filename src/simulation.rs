@@ -26,8 +26,8 @@ use crate::io::run_folder::{self, FolderLock};
 use crate::io::snapshot::{PointMassRecord, Snapshot};
 use crate::io::snapshot_index::{SnapshotEntry, SnapshotIndex};
 use crate::io::summary::{
-    AccretionLedger, Conservation, Flow, MassBudget, MassBudgetRecord, Summary, TotalsRecord,
-    peak_rss_bytes,
+    AccretionLedger, Conservation, Flow, MassBudget, MassBudgetRecord, Summary, Timing,
+    TotalsRecord, peak_rss_bytes,
 };
 use crate::io::timeseries::{
     LIGHTCURVE_HEADER, MODES_HEADER, MONITOR_HEADER, STATISTICS_HEADER, Series,
@@ -36,7 +36,7 @@ use crate::particles::Particles;
 use crate::physics::l1_stream::InjectorState;
 use crate::physics::mass_transfer::MassTransfer;
 use crate::problems::{self, InitialState};
-use crate::sweep::{Physics, Window};
+use crate::sweep::{Physics, StageTimes, Window};
 
 /// Default wall-clock seconds between checkpoints.
 const CHECKPOINT_WALL_SECONDS: f64 = 600.0;
@@ -394,6 +394,9 @@ struct LoopState {
     /// the steps (a Sedov blast's trapped core).
     #[serde(default)]
     max_isolated_energy_fraction: f64,
+    /// Seconds in each part of the sweep, summed over the steps (this rank's).
+    #[serde(default)]
+    sweep_times: StageTimes,
 }
 
 impl LoopState {
@@ -782,6 +785,7 @@ fn start_fresh<const D: usize>(cfg: &Config, opts: &RunOptions) -> Result<(Run<D
         budget: MassBudget::default(),
         next_series: 0.0,
         max_isolated_energy_fraction: 0.0,
+        sweep_times: StageTimes::default(),
     };
     let mut run = Run::new(cfg.clone(), particles, st, bx);
     if let (Some(mt), Some(inj)) = (&run.mt, &mut run.st.injector) {
@@ -1009,6 +1013,7 @@ fn advance<const D: usize>(
         st.t = if lands { target } else { st.t + dt };
         st.steps += 1;
         st.evaluations += 1;
+        st.sweep_times.add(&s.times);
         st.pairs_total += sums[0] as u64;
         st.peak_pairs = st.peak_pairs.max(maxes[0] as usize);
         st.peak_bytes = st.peak_bytes.max(maxes[1] as usize);
@@ -1171,6 +1176,21 @@ fn advance<const D: usize>(
         "end at t = {} after {} steps, {:.2} s, {:.3e} updates/s",
         summary.t_end, summary.steps, summary.wall_seconds, summary.particle_updates_per_second
     ));
+    if let Some(t) = &summary.timing {
+        log.line(&format!(
+            "sweep {:.2} s (find pairs {:.2}, density {:.2}, gradient {:.2}, force {:.2}, build {:.2}, finish {:.2}, wait {:.2}), outside it {:.2} s ({:.1}%)",
+            t.sweep_seconds,
+            t.sweep.find_pairs,
+            t.sweep.density,
+            t.sweep.gradient,
+            t.sweep.force,
+            t.sweep.build,
+            t.sweep.finish,
+            t.sweep.wait,
+            t.outside_sweep_seconds,
+            100.0 * t.outside_sweep_share
+        ));
+    }
     Ok(Outcome {
         ended: Ended::Finished(Box::new(summary)),
         particles: all,
@@ -1422,6 +1442,7 @@ fn finish<const D: usize>(
         binary: run.mt.map(|mt| binary_record(&mt, cfg)),
         ring,
         parallel,
+        timing: Some(Timing::of(st.sweep_times, wall)),
     };
     summary.write(&out.join("summary.json"))?;
     Ok(summary)

@@ -1,7 +1,8 @@
 //! Guards `statistics.csv`, the global totals written during every run: its first and last
 //! rows are `summary.json`'s start and end totals, bit for bit (the same sums of the same
 //! particles), rows come every `output.statistics_steps` steps, and mass plus what was
-//! accreted stays the start's mass in every row.
+//! accreted stays the start's mass in every row; and `summary.json`'s `timing`, the step
+//! loop's wall time split between the sweep's stages and the rest.
 
 use std::path::Path;
 
@@ -111,4 +112,59 @@ fn statistics_steps_zero_is_an_error_naming_the_key() {
     ]);
     assert_ne!(code, 0);
     assert!(err.contains("output.statistics_steps"), "{err}");
+}
+
+/// `summary.json`'s `timing` splits the step loop's wall time: the sweep's stages add up to
+/// its seconds, and those plus the rest make `wall_seconds` (to round-off); the run log
+/// prints the same split.
+#[test]
+fn the_summary_splits_the_wall_time_between_the_sweep_and_the_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ring");
+    ok(&[
+        "run",
+        &problem("ring.toml"),
+        "--quiet",
+        "--out",
+        &s(&out),
+        "--set",
+        "particles.n=20",
+        "--set",
+        "ring.tau_end=0.03",
+    ]);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let t = &summary["timing"];
+    let stage = |k: &str| t["sweep"][k].as_f64().unwrap();
+    let stages = [
+        "build",
+        "find_pairs",
+        "density",
+        "gradient",
+        "force",
+        "finish",
+        "wait",
+    ]
+    .iter()
+    .map(|k| stage(k))
+    .sum::<f64>();
+    let sweep = t["sweep_seconds"].as_f64().unwrap();
+    let outside = t["outside_sweep_seconds"].as_f64().unwrap();
+    let wall = summary["wall_seconds"].as_f64().unwrap();
+    assert!(stage("find_pairs") > 0.0 && stage("force") > 0.0, "{t}");
+    assert!((stages - sweep).abs() <= 1e-9 * sweep, "{stages} {sweep}");
+    // The sweep runs inside the loop: it cannot take longer than the loop.
+    assert!(sweep > 0.0 && sweep <= wall, "{sweep} {wall}");
+    assert!(
+        (sweep + outside - wall).abs() <= 1e-9 * wall,
+        "{sweep} {outside} {wall}"
+    );
+    let share = t["outside_sweep_share"].as_f64().unwrap();
+    assert!((share - outside / wall).abs() < 1e-12, "{share}");
+    let log = std::fs::read_to_string(out.join("run.log")).unwrap();
+    assert!(
+        log.lines()
+            .any(|l| l.contains("] sweep ") && l.contains("outside it")),
+        "{log}"
+    );
 }

@@ -557,8 +557,7 @@ pub fn evaluate<const D: usize>(
         "distributed sweep ended with messages outstanding"
     );
     wait += sweep_stats.times.wait;
-    write_back(parts, &local, &work);
-    crate::memory::keep_vec(work);
+    write_back(parts, &local, work);
     ExchangeStats {
         sweep: SweepStats {
             ghosts: local.num_ghosts(),

@@ -58,6 +58,37 @@ pub struct Summary {
     /// Distributed runs: decomposition, load balance, communication and waiting per rank.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub parallel: Option<serde_json::Value>,
+    /// Where the step loop's time went: the sweep's stages and everything else.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timing: Option<Timing>,
+}
+
+/// The step loop's wall time split between the sweep (its stages summed over the steps, on
+/// this rank or rank 0) and the rest: kicks and drift, external forces, the time step,
+/// diagnostics, sinks, injection and output.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Timing {
+    /// Seconds in each stage of the sweep.
+    pub sweep: crate::sweep::StageTimes,
+    pub sweep_seconds: f64,
+    /// `wall_seconds` less the sweep.
+    pub outside_sweep_seconds: f64,
+    /// Their share of `wall_seconds`.
+    pub outside_sweep_share: f64,
+}
+
+impl Timing {
+    /// From the sweep's stage totals and the loop's wall seconds.
+    pub fn of(sweep: crate::sweep::StageTimes, wall: f64) -> Self {
+        let sweep_seconds = sweep.total();
+        let outside = (wall - sweep_seconds).max(0.0);
+        Self {
+            sweep,
+            sweep_seconds,
+            outside_sweep_seconds: outside,
+            outside_sweep_share: if wall > 0.0 { outside / wall } else { 0.0 },
+        }
+    }
 }
 
 /// Mass, momentum, angular momentum and energy removed by accretion: with it the

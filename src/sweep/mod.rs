@@ -148,7 +148,7 @@ pub struct SweepStats {
 }
 
 /// Where an evaluation's time goes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StageTimes {
     /// Ghosts, grid, copy into cell order.
     pub build: f64,
@@ -317,8 +317,7 @@ pub fn evaluate<const D: usize>(
     let (work, mut stats) = sweep(&mut local, phys, window, &mut NoExchange);
     stats.times.build += build;
     let c = Instant::now();
-    write_back(parts, &local, &work);
-    crate::memory::keep_vec(work);
+    write_back(parts, &local, work);
     stats.times.finish += c.elapsed().as_secs_f64();
     stats
 }
@@ -613,8 +612,9 @@ fn set_av_velocities<const D: usize>(local: &mut Local<D>, phys: &Physics<D>) {
 
 /// Copies the finished quantities of this rank's reals from the working set into `parts`, in
 /// parallel over blocks of the store: each task writes one block of every array, reading
-/// each particle's working-set record once.
-pub fn write_back<const D: usize>(parts: &mut Particles<D>, local: &Local<D>, work: &[Work<D>]) {
+/// each particle's working-set record once. The accumulators then go to `memory`'s pool
+/// for the next evaluation.
+pub fn write_back<const D: usize>(parts: &mut Particles<D>, local: &Local<D>, work: Vec<Work<D>>) {
     const BLOCK: usize = 4096;
     let at = &local.real_at;
     debug_assert_eq!(at.len(), parts.len());
@@ -671,6 +671,7 @@ pub fn write_back<const D: usize>(parts: &mut Particles<D>, local: &Local<D>, wo
                 inter[o] = w.interactions;
             }
         });
+    crate::memory::keep_vec(work);
 }
 
 /// Every pair the sweep's blocks find, as (i, j) local indices, slab by slab (for tests and

@@ -72,8 +72,8 @@ fn half_stencil<const D: usize>() -> Vec<[isize; D]> {
 /// kernel's support from it (in 3D about a quarter of the candidates: the stencil's edge
 /// and corner cells reach past the sphere). Pair finding and the count of candidates
 /// ([`candidates`]) both walk it.
-struct StencilCells<const D: usize> {
-    stencil: Vec<[isize; D]>,
+struct StencilCells<'a, const D: usize> {
+    stencil: &'a [[isize; D]],
     /// Cell key the ranges belong to.
     cell: u64,
     /// Particle range and box (lower, upper corner) of each occupied stencil cell.
@@ -83,10 +83,10 @@ struct StencilCells<const D: usize> {
     margin: [f64; D],
 }
 
-impl<const D: usize> StencilCells<D> {
-    fn new(local: &Local<D>) -> Self {
+impl<'a, const D: usize> StencilCells<'a, D> {
+    /// Over `local`'s grid, with the offsets of [`half_stencil`].
+    fn new(local: &Local<D>, stencil: &'a [[isize; D]]) -> Self {
         let g = &local.grid;
-        let stencil = half_stencil::<D>();
         let ranges = Vec::with_capacity(stencil.len());
         Self {
             stencil,
@@ -106,7 +106,7 @@ impl<const D: usize> StencilCells<D> {
         self.ranges.clear();
         let g = &local.grid;
         let ci = cell_coords(g.n, c);
-        for o in &self.stencil {
+        for o in self.stencil {
             if let Some(nc) = offset_cell(g.n, &ci, o) {
                 let (a, b) = local.cells.range(g.key(nc));
                 if a < b {
@@ -241,6 +241,7 @@ impl PairBlock {
         };
         let support2 = kernel.support() * kernel.support();
         let pos = &local.pos;
+        let stencil = half_stencil::<D>();
 
         let groups: Vec<Vec<Pair>> = (i_start..i_end)
             .into_par_iter()
@@ -249,7 +250,7 @@ impl PairBlock {
                 let g1 = (g0 + GRAIN).min(i_end);
                 let mut pairs = SCRATCH.take();
                 pairs.clear();
-                let mut cells = StencilCells::new(local);
+                let mut cells = StencilCells::new(local, &stencil);
                 for i in g0..g1 {
                     let c = local.cell[i];
                     cells.set_cell(local, c);
@@ -533,7 +534,8 @@ impl PairBlock {
 /// cells within the support's reach ([`PairBlock::find`]'s loops). Over the pairs found,
 /// the candidates each pair costs ([`crate::sweep::cost`]).
 pub fn candidates<const D: usize>(local: &Local<D>, support: f64) -> u64 {
-    let mut cells = StencilCells::new(local);
+    let stencil = half_stencil::<D>();
+    let mut cells = StencilCells::new(local, &stencil);
     let mut total = 0u64;
     for i in 0..local.len() {
         let c = local.cell[i];
