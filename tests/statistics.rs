@@ -24,29 +24,42 @@ fn rows(run: &Path) -> Vec<Vec<f64>> {
     parse_series(&text, STATISTICS_HEADER, false).unwrap()
 }
 
-#[test]
-fn statistics_rows_are_the_summary_totals_and_conserve_mass_with_accretion() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("ring");
-    // The spreading ring: gravity, viscosity and accretion at the inner radius.
-    ok(&[
+/// A short run of the spreading ring (gravity, viscosity; 20 particles per ring, to
+/// τ = 0.03) with `sets`, into `dir`/ring: its folder and `summary.json`.
+fn ring_run(dir: &Path, sets: &[&str]) -> (std::path::PathBuf, serde_json::Value) {
+    let out = dir.join("ring");
+    let (file, o) = (problem("ring.toml"), s(&out));
+    let mut args = vec![
         "run",
-        &problem("ring.toml"),
+        &file,
         "--quiet",
         "--out",
-        &s(&out),
+        &o,
         "--set",
         "particles.n=20",
         "--set",
         "ring.tau_end=0.03",
-        "--set",
-        "output.statistics_steps=7",
-        // Inside the ring's inner edge (0.6): particles are accreted from the start.
-        "--set",
-        "gravity.accretion_radius=0.65",
-    ]);
-    let summary: serde_json::Value =
+    ];
+    for set in sets {
+        args.extend(["--set", set]);
+    }
+    ok(&args);
+    let summary =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    (out, summary)
+}
+
+#[test]
+fn statistics_rows_are_the_summary_totals_and_conserve_mass_with_accretion() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, summary) = ring_run(
+        dir.path(),
+        &[
+            "output.statistics_steps=7",
+            // Inside the ring's inner edge (0.6): particles are accreted from the start.
+            "gravity.accretion_radius=0.65",
+        ],
+    );
     let rows = rows(&out);
     let (first, last) = (&rows[0], rows.last().unwrap());
     let steps = summary["steps"].as_u64().unwrap();
@@ -120,20 +133,7 @@ fn statistics_steps_zero_is_an_error_naming_the_key() {
 #[test]
 fn the_summary_splits_the_wall_time_between_the_sweep_and_the_rest() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("ring");
-    ok(&[
-        "run",
-        &problem("ring.toml"),
-        "--quiet",
-        "--out",
-        &s(&out),
-        "--set",
-        "particles.n=20",
-        "--set",
-        "ring.tau_end=0.03",
-    ]);
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let (out, summary) = ring_run(dir.path(), &[]);
     let t = &summary["timing"];
     let stage = |k: &str| t["sweep"][k].as_f64().unwrap();
     let stages = [
