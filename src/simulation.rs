@@ -1291,7 +1291,8 @@ fn write_series<const D: usize>(
     team.sum(&mut hist);
     let r_disk = problems::cv::histogram_radius(&hist, 0.9);
     let disk_mass: f64 = hist.iter().sum();
-    let l = problems::cv::luminosities(b, p, r_disk, support, st.t);
+    let rim = problems::cv::histogram_radius(&hist, 0.99);
+    let l = problems::cv::luminosities(b, p, r_disk, rim, support, st.t);
     let hot = phys.outbursts.map_or(0.0, |o| o.hot_mass(p, &phys.eos).0);
     let mut v = vec![
         l[0],

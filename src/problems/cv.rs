@@ -281,11 +281,13 @@ pub fn histogram_radius(hist: &[f64], fraction: f64) -> f64 {
 /// Luminosity Σ m ε̇ of the disk, the stream and the spot (module doc of
 /// `physics::binary::Region`), for a disk of radius `r_disk`, and what the binary's
 /// observer sees of it at time `t` (`analysis::observer`: disk gas through the disk's
-/// faces, spot gas through the rim, stream gas isotropically; eclipsed by the donor).
+/// faces, spot gas through the rim, stream gas isotropically; eclipsed by the donor; face
+/// light hidden behind the disk's edge at `rim`).
 pub fn luminosities<const D: usize>(
     b: &Binary,
     p: &Particles<D>,
     r_disk: f64,
+    rim: f64,
     support: f64,
     t: f64,
 ) -> [f64; 4] {
@@ -302,7 +304,9 @@ pub fn luminosities<const D: usize>(
         l[k] += li;
         if li != 0.0 {
             let x3 = std::array::from_fn(|d| if d < D { x[d] } else { 0.0 });
-            l[3] += li * b.observer.visibility(x3, surface, o);
+            if surface != Surface::Face || !b.observer.rim_hides(x3, p.cs[i], rim, o) {
+                l[3] += li * b.observer.visibility(x3, surface, o);
+            }
         }
     }
     l
