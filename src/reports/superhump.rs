@@ -71,7 +71,8 @@ pub const SMOOTH_ORBITS: f64 = 1.0;
 /// alone holds the amplitude near 0.01 (measured in the first orbits of
 /// `problems/superhump.toml`).
 pub const ECCENTRIC_MIN: f64 = 0.03;
-/// Orbits at the start of a run left out of the search for the peak: the set-up relaxes
+/// Orbits at the start of a run left out of the search for the peak, the onset and the
+/// floor: the set-up relaxes
 /// (the stream's first impact, the edges of an initial disk) and lifts the m = 1 amplitude
 /// for about an orbit.
 pub const START_ORBITS: f64 = 2.0;
@@ -309,19 +310,23 @@ pub fn growth(t: &[f64], m1: &[f64], osc: &[f64], m2: &[f64], r_disk: &[f64]) ->
     };
     let e_peak = es[peak];
     (g.e_peak, g.peak_orbit) = (e_peak, t[peak]);
-    let onset = es[..=peak]
-        .iter()
-        .position(|e| *e >= 0.5 * e_peak)
-        .unwrap_or(peak);
-    g.e_floor = es[..onset.max(1)]
+    // The onset, floor and fit are searched after the set-up's relaxation as the peak is:
+    // a transient in the first orbits must not stand for the floor.
+    let onset = from
+        + es[from..=peak]
+            .iter()
+            .position(|e| *e >= 0.5 * e_peak)
+            .unwrap_or(peak - from);
+    g.e_floor = es[from..onset.max(from + 1)]
         .iter()
         .copied()
         .filter(|x| x.is_finite())
         .fold(f64::INFINITY, f64::min);
-    let start = es[..=peak]
-        .iter()
-        .position(|e| *e >= 0.8 * e_peak)
-        .unwrap_or(peak);
+    let start = from
+        + es[from..=peak]
+            .iter()
+            .position(|e| *e >= 0.8 * e_peak)
+            .unwrap_or(peak - from);
     let end = es.iter().rposition(|e| *e >= 0.5 * e_peak).unwrap_or(peak);
     g.eccentric = e_peak >= ECCENTRIC_MIN
         && e_peak >= 3.0 * g.e_floor
@@ -338,11 +343,12 @@ pub fn growth(t: &[f64], m1: &[f64], osc: &[f64], m2: &[f64], r_disk: &[f64]) ->
     g.onset_orbit = Some(t[onset]);
     g.r_disk_at_onset = r_disk[onset].is_finite().then_some(r_disk[onset]);
     let low = (e_peak / 8.0).max(1.5 * g.e_floor);
-    let a = es[..onset].iter().rposition(|e| *e <= low).unwrap_or(0);
-    let b = es[..=peak]
-        .iter()
-        .position(|e| *e >= 0.7 * e_peak)
-        .unwrap_or(onset);
+    let a = from + es[from..onset].iter().rposition(|e| *e <= low).unwrap_or(0);
+    let b = from
+        + es[from..=peak]
+            .iter()
+            .position(|e| *e >= 0.7 * e_peak)
+            .unwrap_or(onset - from);
     // The logistic de/dt = γ e (1 − e/e_peak) has ln(e/(e_peak − e)) = γ t + const exactly.
     let (x, y): (Vec<f64>, Vec<f64>) = (a..=b)
         .filter(|&k| es[k] > 0.0 && es[k] < e_peak)
@@ -1057,6 +1063,33 @@ mod tests {
         );
         // The last quarter's median: 0.2 e^{−(87.5 − 50)/15} = 0.016.
         assert!((g.e_end - 0.0164).abs() < 0.001, "{g:?}");
+    }
+
+    #[test]
+    fn a_set_up_transient_does_not_stand_for_the_floor() {
+        // The disk starts lopsided and relaxes within an orbit (m = 1 from 0.055, as the
+        // q = 0.15 disk of problems/superhump.toml at α = 0.2 starts at 0.025–0.05), sits at
+        // 0.015 and then grows slowly (e-folding 12.5 orbits) to 0.075: five times its
+        // floor, an eccentric disk. With the onset searched from the run's start the
+        // transient was the onset and its 0.045 the floor, and the disk was called circular.
+        let t: Vec<f64> = (0..6000).map(|k| k as f64 * 0.02).collect();
+        let mode = |t: f64| 0.06 / (1.0 + 59.0 * (-0.08 * (t - 10.0)).exp());
+        let e: Vec<f64> = t
+            .iter()
+            .map(|&t| 0.015 + 0.04 * (-t / 0.8).exp() + mode(t))
+            .collect();
+        let g = growth(&t, &e, &e, &e, &vec![0.45; t.len()]);
+        assert!(g.eccentric, "{g:?}");
+        assert!(g.e_floor < 0.017, "{g:?}");
+        // Onset where e is half its peak: the logistic there is e_peak/2 − 0.015. The
+        // one-orbit running mean moves it by far less than the orbit allowed.
+        let e_peak = 0.015 + mode(t[t.len() - 1]);
+        let half = e_peak / 2.0 - 0.015;
+        let on = 10.0 + (59.0 / (0.06 / half - 1.0)).ln() / 0.08;
+        assert!(
+            (g.onset_orbit.unwrap() - on).abs() < 1.0,
+            "{g:?} onset {on}"
+        );
     }
 
     #[test]
