@@ -50,6 +50,8 @@ pub struct BenchResult {
     pub parallel_efficiency: Option<f64>,
     /// Candidates pair finding tests per pair found (last step's positions).
     pub candidates_per_pair: f64,
+    /// Stencil-cell boxes pair finding tests per pair found (same).
+    pub cells_per_pair: f64,
     /// Flops and bytes moved per pair of each loop, counted from the code.
     pub cost_per_pair: SweepCost,
     /// All four loops together.
@@ -66,14 +68,14 @@ impl BenchResult {
     }
 
     /// The header of [`BenchResult::csv_row`].
-    pub const CSV_HEADER: &'static str = "particles,threads,window,mean_neighbours,seconds_per_step,particle_updates_per_second,pairs_per_second,pairs_per_second_per_core,speedup,parallel_efficiency,build,find_pairs,density,gradient,force,finish,outside_sweep,peak_window_bytes,peak_rss_bytes,candidates_per_pair,flops_per_pair,bytes_per_pair";
+    pub const CSV_HEADER: &'static str = "particles,threads,window,mean_neighbours,seconds_per_step,particle_updates_per_second,pairs_per_second,pairs_per_second_per_core,speedup,parallel_efficiency,build,find_pairs,density,gradient,force,finish,outside_sweep,peak_window_bytes,peak_rss_bytes,candidates_per_pair,cells_per_pair,flops_per_pair,bytes_per_pair";
 
     /// One CSV row (times in seconds per step; an empty speedup where none was measured).
     pub fn csv_row(&self) -> String {
         let opt = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6}"));
         let t = &self.times_per_step;
         format!(
-            "{},{},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.4},{:.3},{:.3}",
+            "{},{},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.4},{:.4},{:.3},{:.3}",
             self.particles,
             self.threads,
             self.window,
@@ -94,6 +96,7 @@ impl BenchResult {
             self.peak_window_bytes,
             self.peak_rss_bytes,
             self.candidates_per_pair,
+            self.cells_per_pair,
             self.flops_per_pair,
             self.bytes_per_pair
         )
@@ -161,8 +164,8 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
     // The last evaluation's positions are the particles' (the final kick moves none).
     let support = phys.kernel.support();
     let tested = candidates(&Local::build(&p, &bx, support), support);
-    let candidates_per_pair = tested as f64 / last_pairs.max(1) as f64;
-    let cost = sweep_cost::<3>(&Setting::of(&phys, candidates_per_pair));
+    let setting = Setting::of(&phys, tested, last_pairs);
+    let cost = sweep_cost::<3>(&setting);
     Ok(BenchResult {
         particles: p.len(),
         threads,
@@ -181,7 +184,8 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
         times_per_step,
         speedup: None,
         parallel_efficiency: None,
-        candidates_per_pair,
+        candidates_per_pair: setting.candidates_per_pair,
+        cells_per_pair: setting.cells_per_pair,
         cost_per_pair: cost,
         flops_per_pair: cost.total().flops,
         bytes_per_pair: cost.total().bytes,

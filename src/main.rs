@@ -691,10 +691,11 @@ fn real_main(cli: Cli) -> Result<()> {
                         );
                         let c = &r.cost_per_pair;
                         println!(
-                            "          per pair: find pairs {:.1} flops {:.0} B ({:.2} candidates), density {:.1} flops {:.0} B, gradient {:.1} flops {:.0} B, force {:.1} flops {:.0} B; flops per pair {:.1}, bytes moved per pair {:.0}",
+                            "          per pair: find pairs {:.1} flops {:.0} B ({:.2} candidates, {:.2} cell boxes), density {:.1} flops {:.0} B, gradient {:.1} flops {:.0} B, force {:.1} flops {:.0} B; flops per pair {:.1}, bytes moved per pair {:.0}",
                             c.find.flops,
                             c.find.bytes,
                             r.candidates_per_pair,
+                            r.cells_per_pair,
                             c.density.flops,
                             c.density.bytes,
                             c.gradient.flops,

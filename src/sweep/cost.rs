@@ -11,16 +11,18 @@
 //!
 //! **Bytes:** what the pair loop loads or stores, wherever it comes from (registers aside):
 //! the [`Pair`] record; each partner's fields the sum reads; the two accumulators it
-//! updates (read and written: 2 × their size per side). Pair finding: per candidate tested,
-//! its position and pair class; per pair found, the record stored, then copied once into
-//! the block (read and write). Sizes are taken from the types themselves, so the counts
-//! follow any change of them. Not counted: per-particle work (zeroing and merging the
-//! per-task buffers, the finishing of slabs), and the growth of the per-task pair vectors.
+//! updates (read and written: 2 × their size per side). Pair finding: per occupied stencil
+//! cell and particle, the cell's range and box and the test of the box against the
+//! particle's reach; per candidate tested, its position and pair class; per pair found, the
+//! record stored, then copied once into the block (read and write). Sizes are taken from
+//! the types themselves, so the counts follow any change of them. Not counted: per-particle
+//! work (zeroing and merging the per-task buffers, the finishing of slabs), and the growth
+//! of the per-task pair vectors.
 
 use std::mem::size_of;
 
 use crate::sweep::local::Local;
-use crate::sweep::pairs::{ForceSum, Pair};
+use crate::sweep::pairs::{DensitySum, ForceSum, Pair, StencilCell};
 
 /// Fraction of pairs that approach (Π_ij ≠ 0).
 pub const APPROACHING: f64 = 0.5;
@@ -64,18 +66,32 @@ pub struct Setting {
     pub orbital: bool,
     /// Artificial conductivity on: u read, the conducted heat computed.
     pub conductivity: bool,
+    /// The pressure–energy formulation (`physics::pressure_energy`): the density sum adds
+    /// m u W, the force sum reads u.
+    pub pressure_energy: bool,
     /// Candidates tested by pair finding per pair found ([`crate::sweep::pairs::candidates`]).
     pub candidates_per_pair: f64,
+    /// Stencil-cell boxes tested by pair finding per pair found (same).
+    pub cells_per_pair: f64,
 }
 
 impl Setting {
     /// What `phys` switches on, as the sweep reads it.
-    pub fn of<const D: usize>(phys: &crate::sweep::Physics<D>, candidates_per_pair: f64) -> Self {
+    /// `tested` and `pairs`: what pair finding tested over a working set, and the pairs it
+    /// found there.
+    pub fn of<const D: usize>(
+        phys: &crate::sweep::Physics<D>,
+        tested: crate::sweep::pairs::Tested,
+        pairs: u64,
+    ) -> Self {
+        let per_pair = |n: u64| n as f64 / pairs.max(1) as f64;
         Self {
             viscous: phys.viscous(),
             orbital: phys.av.orbital && phys.gravity.is_some(),
             conductivity: phys.av.conductivity > 0.0,
-            candidates_per_pair,
+            pressure_energy: phys.pressure_energy_gamma().is_some(),
+            candidates_per_pair: per_pair(tested.candidates),
+            cells_per_pair: per_pair(tested.cells),
         }
     }
 }
@@ -111,9 +127,13 @@ fn velocity<const D: usize>() -> usize {
     D * field::<D, _>(|l| &l.vel[0])
 }
 
-/// Pair finding, per pair found: the distance tests of `candidates_per_pair` candidates,
-/// √r², the cubic spline's W and F, the record stored and copied into the block.
-pub fn find<const D: usize>(candidates_per_pair: f64) -> PairCost {
+/// Pair finding, per pair found: the box tests of `cells_per_pair` stencil cells, the
+/// distance tests of `candidates_per_pair` candidates, √r², the cubic spline's W and F, the
+/// record stored and copied into the block.
+pub fn find<const D: usize>(candidates_per_pair: f64, cells_per_pair: f64) -> PairCost {
+    // Per axis: lo − x, x − hi, their max, the max with 0, e², added to d² (6).
+    let cell_flops = 6.0 * D as f64;
+    let cell_bytes = size_of::<StencilCell<D>>();
     // r² = Σ (x_i − x_j)²: D subtractions, D products, D sums (from 0.0).
     let candidate_flops = 3.0 * D as f64;
     let candidate_bytes = position::<D>() + field::<D, _>(|l| &l.class);
@@ -125,18 +145,29 @@ pub fn find<const D: usize>(candidates_per_pair: f64) -> PairCost {
     let pair_flops = 4.0 + shape;
     let pair_bytes = 3 * size_of::<Pair>();
     PairCost {
-        flops: candidates_per_pair * candidate_flops + pair_flops,
-        bytes: candidates_per_pair * candidate_bytes as f64 + pair_bytes as f64,
+        flops: cells_per_pair * cell_flops + candidates_per_pair * candidate_flops + pair_flops,
+        bytes: cells_per_pair * cell_bytes as f64
+            + candidates_per_pair * candidate_bytes as f64
+            + pair_bytes as f64,
     }
 }
 
-/// Density, Eq. (5): m_j W and m_i W, added with a count to each partner.
-pub fn density<const D: usize>() -> PairCost {
-    let reads = 2 * field::<D, _>(|l| &l.mass);
+/// Density, Eq. (5): m_j W and m_i W, added with a count to each partner; with the
+/// pressure–energy formulation also m u W (u of both read, two products, two sums more).
+pub fn density<const D: usize>(s: &Setting) -> PairCost {
+    let mass = 2 * field::<D, _>(|l| &l.mass);
+    if s.pressure_energy {
+        let u = 2 * field::<D, _>(|l| &l.u);
+        let acc = 2 * 2 * size_of::<DensitySum>();
+        return PairCost {
+            flops: 8.0,
+            bytes: (size_of::<Pair>() + mass + u + acc) as f64,
+        };
+    }
     let acc = 2 * 2 * size_of::<(f64, u32)>();
     PairCost {
         flops: 4.0,
-        bytes: (size_of::<Pair>() + reads + acc) as f64,
+        bytes: (size_of::<Pair>() + mass + acc) as f64,
     }
 }
 
@@ -174,10 +205,17 @@ pub fn force<const D: usize>(s: &Setting) -> PairCost {
     if s.orbital {
         side += field::<D, _>(|l| &l.v_av);
     }
+    if s.conductivity || s.pressure_energy {
+        side += field::<D, _>(|l| &l.u);
+    }
     if s.conductivity {
         // ρ̄ (2), v_sig,u (3), the conducted heat (6), added to work_i and work_j (2).
         flops += 13.0;
-        side += field::<D, _>(|l| &l.u);
+    }
+    if s.pressure_energy {
+        // y = (γ − 1) u of both (2). Its pressure part, u_i u_j (1), the two weights (2 ÷),
+        // their sum (1), f v·r (1), both works (2), costs what Eq. (7)'s (7) does.
+        flops += 2.0;
     }
     if s.viscous {
         // g = f dx (D), 1/ρ both (2), v_ij (D); per (a, b): (S_j/ρ_i + S_i/ρ_j) g_b summed (5),
@@ -195,8 +233,8 @@ pub fn force<const D: usize>(s: &Setting) -> PairCost {
 /// All four loops for `setting`.
 pub fn sweep_cost<const D: usize>(setting: &Setting) -> SweepCost {
     SweepCost {
-        find: find::<D>(setting.candidates_per_pair),
-        density: density::<D>(),
+        find: find::<D>(setting.candidates_per_pair, setting.cells_per_pair),
+        density: density::<D>(setting),
         gradient: gradient::<D>(),
         force: force::<D>(setting),
     }
@@ -220,8 +258,26 @@ mod tests {
         assert_eq!(size_of::<(f64, u32)>(), 16);
 
         // Density: the record, m_i and m_j, (ρ, count) read and written for both.
-        assert_eq!(density::<3>().bytes, (32 + 2 * f + 2 * 2 * 16) as f64);
-        assert_eq!(density::<3>().bytes, 112.0);
+        let hydro = Setting::default();
+        assert_eq!(density::<3>(&hydro).bytes, (32 + 2 * f + 2 * 2 * 16) as f64);
+        assert_eq!(density::<3>(&hydro).bytes, 112.0);
+        // Pressure–energy: u of both too, (ρ, Σ m u W, count) read and written for both.
+        let pe = Setting {
+            pressure_energy: true,
+            ..hydro
+        };
+        assert_eq!(size_of::<DensitySum>(), 24);
+        assert_eq!(density::<3>(&pe).bytes, (32 + 4 * f + 2 * 2 * 24) as f64);
+        assert_eq!(density::<3>(&pe).flops, 8.0);
+        // Its force sum reads u of both and forms y = (γ − 1) u of each.
+        assert_eq!(force::<3>(&pe).bytes - force::<3>(&hydro).bytes, 16.0);
+        assert_eq!(force::<3>(&pe).flops - force::<3>(&hydro).flops, 2.0);
+        // With the conductivity as well, u is read once.
+        let both = Setting {
+            conductivity: true,
+            ..pe
+        };
+        assert_eq!(force::<3>(&both).bytes - force::<3>(&hydro).bytes, 16.0);
         // Gradient: x, v, m, ρ of both; the 3×3 gradient read and written for both.
         assert_eq!(
             gradient::<3>().bytes,
@@ -230,7 +286,6 @@ mod tests {
         assert_eq!(gradient::<3>().bytes, 448.0);
         assert_eq!(gradient::<3>().flops, 56.0);
         // Force, the bench's hydro: x, v, m, ρ, p, c_s, α factor of both; a, du, diss, v_sig.
-        let hydro = Setting::default();
         assert_eq!(
             force::<3>(&hydro).bytes,
             (32 + 2 * 11 * f + 2 * 2 * 6 * f) as f64
@@ -254,14 +309,22 @@ mod tests {
             ..hydro
         };
         assert_eq!(force::<3>(&cond).bytes - force::<3>(&hydro).bytes, 16.0);
-        // Pair finding: x and the class byte per candidate; the record stored, read, written.
-        assert_eq!(find::<3>(0.0).bytes, (3 * 32) as f64);
+        // Pair finding: x and the class byte per candidate; the record stored, read, written;
+        // per stencil cell its range (two indices) and box (two corners), 18 flops in 3D.
+        assert_eq!(find::<3>(0.0, 0.0).bytes, (3 * 32) as f64);
         assert_eq!(
-            find::<3>(1.0).bytes - find::<3>(0.0).bytes,
+            find::<3>(1.0, 0.0).bytes - find::<3>(0.0, 0.0).bytes,
             (3 * f + 1) as f64
         );
-        assert_eq!(find::<3>(1.0).flops - find::<3>(0.0).flops, 9.0);
-        assert_eq!(find::<3>(0.0).flops, 4.0 + 0.125 * 9.0 + 0.875 * 7.0);
+        assert_eq!(find::<3>(1.0, 0.0).flops - find::<3>(0.0, 0.0).flops, 9.0);
+        assert_eq!(find::<3>(0.0, 0.0).flops, 4.0 + 0.125 * 9.0 + 0.875 * 7.0);
+        assert_eq!(
+            find::<3>(0.0, 1.0).bytes - find::<3>(0.0, 0.0).bytes,
+            (2 * size_of::<usize>() + 6 * f) as f64
+        );
+        assert_eq!(find::<3>(0.0, 1.0).bytes - find::<3>(0.0, 0.0).bytes, 64.0);
+        assert_eq!(find::<3>(0.0, 1.0).flops - find::<3>(0.0, 0.0).flops, 18.0);
+        assert_eq!(find::<2>(0.0, 1.0).flops - find::<2>(0.0, 0.0).flops, 12.0);
     }
 
     #[test]

@@ -67,6 +67,10 @@ fn half_stencil<const D: usize>() -> Vec<[isize; D]> {
     out
 }
 
+/// An occupied stencil cell as pair finding reads it for each particle: its particle range
+/// and box (lower, upper corner).
+pub type StencilCell<const D: usize> = (usize, usize, [f64; D], [f64; D]);
+
 /// The candidate partners of the particles of one cell: the occupied cells of its half
 /// stencil with their boxes, so that each particle skips the cells lying wholly beyond the
 /// kernel's support from it (in 3D about a quarter of the candidates: the stencil's edge
@@ -77,7 +81,7 @@ struct StencilCells<'a, const D: usize> {
     /// Cell key the ranges belong to.
     cell: u64,
     /// Particle range and box (lower, upper corner) of each occupied stencil cell.
-    ranges: Vec<(usize, usize, [f64; D], [f64; D])>,
+    ranges: Vec<StencilCell<D>>,
     /// Rounding allowance on the boxes' corners (relative 1e-9 of the grid's extent, far
     /// below the support and far above the error of `lo + c · cell`).
     margin: [f64; D],
@@ -177,7 +181,7 @@ impl<const D: usize> Accumulator for [[f64; D]; D] {
 
 /// Density-stage sums of the pressure–energy formulation: Σ m W, Σ m u W, neighbours.
 #[derive(Clone, Copy, Debug)]
-struct DensitySum {
+pub struct DensitySum {
     rho: f64,
     mu_w: f64,
     n: u32,
@@ -529,21 +533,31 @@ impl PairBlock {
     }
 }
 
-/// How many candidate partners pair finding tests for distance over the whole working set:
-/// for each particle, the particles below it in its own cell and those of the half-stencil
-/// cells within the support's reach ([`PairBlock::find`]'s loops). Over the pairs found,
-/// the candidates each pair costs ([`crate::sweep::cost`]).
-pub fn candidates<const D: usize>(local: &Local<D>, support: f64) -> u64 {
+/// What pair finding tests over the whole working set ([`candidates`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Tested {
+    /// Candidate partners tested for distance.
+    pub candidates: u64,
+    /// Occupied stencil cells whose box was tested against a particle's reach.
+    pub cells: u64,
+}
+
+/// What pair finding tests over the whole working set ([`PairBlock::find`]'s loops): for
+/// each particle, the box of every occupied cell of its half stencil, and as candidates the
+/// particles below it in its own cell and those of the stencil cells within the support's
+/// reach. Over the pairs found, what each pair costs ([`crate::sweep::cost`]).
+pub fn candidates<const D: usize>(local: &Local<D>, support: f64) -> Tested {
     let stencil = half_stencil::<D>();
     let mut cells = StencilCells::new(local, &stencil);
-    let mut total = 0u64;
+    let mut total = Tested::default();
     for i in 0..local.len() {
         let c = local.cell[i];
         cells.set_cell(local, c);
         let x = local.position(i);
-        total += (i - local.cells.range(c).0) as u64;
+        total.candidates += (i - local.cells.range(c).0) as u64;
+        total.cells += cells.ranges.len() as u64;
         for (a, b) in cells.near(x, support * support) {
-            total += (b - a) as u64;
+            total.candidates += (b - a) as u64;
         }
     }
     total
@@ -602,7 +616,15 @@ mod tests {
             .map(|s| PairBlock::find(&local, &kernel, s).len() as u64)
             .sum();
         let n = local.len() as u64;
-        let c = candidates(&local, kernel.support());
+        let tested = candidates(&local, kernel.support());
+        let c = tested.candidates;
+        // At most the 13 occupied cells of the 3D half stencil per particle, at least one
+        // (the box is dense).
+        assert!(
+            (n..=13 * n).contains(&tested.cells),
+            "{} cells for {n}",
+            tested.cells
+        );
         assert!(
             pairs > 0 && pairs < c && c < n * (n - 1) / 2,
             "{pairs} {c} {n}"
@@ -623,7 +645,7 @@ mod tests {
         let (p, bx, h) = crate::bench::uniform_box(4000, 50.0, 3).unwrap();
         let kernel = Kernel::<3>::new(h);
         let local = Local::build(&p, &bx, kernel.support());
-        let tested = candidates(&local, kernel.support());
+        let tested = candidates(&local, kernel.support()).candidates;
         // Every particle below in its cell and every particle of its occupied stencil
         // cells, from the cell occupancy alone.
         let grid = &local.grid;
