@@ -44,7 +44,7 @@ pub struct Config {
     pub cooling: Option<crate::physics::cooling::Cooling>,
     /// The dwarf-nova disk instability (needs an ideal gas and a central mass, replaces
     /// `[viscosity]` and `[cooling]`): `alpha_cold`, `alpha_hot`, `cs_cold`, `cs_hot`,
-    /// `sigma_max`, `sigma_min`, `r0`, `slope`, `beta`, `unstable_branch` (`physics::outbursts`).
+    /// `sigma_max`, `sigma_min`, `r0`, `slope`, `beta`, `unstable_branch`, `transport` (`physics::outbursts`).
     pub outbursts: Option<crate::physics::outbursts::Outbursts>,
     /// A disk already in place about a cv problem's accretor: `r_in`, `r_out`, `spacing`
     /// (`problems::cv_disk`).

@@ -33,7 +33,21 @@
 //! transition begun where Σ passed Σ_max then runs on when Σ falls back a little (u_mid
 //! lies just above u_c there): the thermal runaway. Without it (the default) the branch
 //! flips at the mid-point of the targets, and gas whose noisy SPH Σ wanders about Σ_max
-//! keeps turning back half-heated. Σ is the particle's density in 2D (the density of a 2D SPH disk is its surface
+//! keeps turning back half-heated.
+//!
+//! The relaxation acts on each particle alone: nothing carries heat between neighbours, so
+//! gas between the thresholds keeps its branch particle by particle, and an annulus can
+//! stay a salt-and-pepper mixture of hot and cold gas at the same Σ where a real disk has
+//! one state and fronts between states (Menou, Hameury & Stehle 1999: fronts move by the
+//! radial transport of heat and mass). `transport = true` keeps the energy equation's
+//! compression work and the artificial conductivity's heat exchange between neighbours
+//! (Price 2008; `artificial_viscosity.conductivity`, with the pressure signal) beside the
+//! relaxation, which then replaces only the dissipation:
+//!
+//!   du_i/dt = −(u_i − u_branch) Ω_K/β + (du_i/dt)_work + (du_i/dt)_conduction,
+//!
+//! so that a hot particle among cold neighbours loses its heat to them and a mixed annulus
+//! settles on one branch. Σ is the particle's density in 2D (the density of a 2D SPH disk is its surface
 //! density) and √(2π) ρ H in 3D (H = c_s/Ω_K, the midplane estimate).
 
 use serde::{Deserialize, Serialize};
@@ -72,6 +86,11 @@ pub struct Outbursts {
     /// transition, once begun, runs away to the other branch (module doc).
     #[serde(default)]
     pub unstable_branch: bool,
+    /// Whether the energy equation's compression work and conduction between neighbours
+    /// act beside the relaxation (default false: the relaxation replaces all of du/dt;
+    /// module doc).
+    #[serde(default)]
+    pub transport: bool,
 }
 
 fn one() -> f64 {
@@ -255,13 +274,19 @@ impl Outbursts {
     }
 
     /// Replaces every particle's du/dt by the relaxation towards its branch (after the
-    /// sweep, which set ρ and c_s).
+    /// sweep, which set ρ, c_s, du/dt and the dissipation); with `transport` the sweep's
+    /// du/dt less its dissipation (the compression work and the conduction) stays.
     pub fn set_rates<const D: usize>(&self, p: &mut Particles<D>, eos: &Eos, g: &PointMass) {
         let Eos::Ideal { gamma } = *eos else { return };
         for i in 0..p.len() {
             let r = cylindrical_radius(&p.position(i));
             let sigma = Self::surface_density(p.rho[i], p.cs[i], r, g.gm, D);
-            p.du[i] = self.rate(gamma, g, p.u[i], sigma, r);
+            let kept = if self.transport {
+                p.du[i] - p.diss[i]
+            } else {
+                0.0
+            };
+            p.du[i] = self.rate(gamma, g, p.u[i], sigma, r) + kept;
         }
     }
 
@@ -298,6 +323,7 @@ mod tests {
             slope: 1.05,
             beta: 2.0,
             unstable_branch: false,
+            transport: false,
         }
     }
 
@@ -318,6 +344,35 @@ mod tests {
         assert!((hi - 2.0 * 2f64.powf(1.05)).abs() < 1e-12 && (lo - 2f64.powf(1.05)).abs() < 1e-12);
         assert_eq!(m.next_branch(Branch::Cold, 4.0, 1.0), Branch::Cold);
         assert_eq!(m.next_branch(Branch::Cold, 4.2, 1.0), Branch::Hot);
+    }
+
+    #[test]
+    fn transport_keeps_the_work_and_conduction_beside_the_relaxation() {
+        // One particle at R = 0.5 with the sweep's du/dt = 5 of which 3 is dissipation:
+        // without transport du/dt is the relaxation alone, with it the relaxation + 2.
+        let g = PointMass {
+            gm: 1.0,
+            softening: 0.0,
+            accretion_radius: None,
+        };
+        let eos = Eos::Ideal { gamma: GAMMA };
+        let mut m = model();
+        let u = 0.5 * (m.branch_u(GAMMA, Branch::Cold) + m.branch_u(GAMMA, Branch::Hot));
+        let mut p = Particles::<2>::new();
+        p.push(0, [0.5, 0.0], [0.0, 0.0], 1.0, u);
+        p.rho[0] = 1.5;
+        let relax = m.rate(GAMMA, &g, u, 1.5, 0.5);
+        assert!(relax != 0.0);
+        for (transport, kept) in [(false, 0.0), (true, 2.0)] {
+            m.transport = transport;
+            (p.du[0], p.diss[0]) = (5.0, 3.0);
+            m.set_rates(&mut p, &eos, &g);
+            assert!(
+                (p.du[0] - (relax + kept)).abs() < 1e-12,
+                "{transport}: {}",
+                p.du[0]
+            );
+        }
     }
 
     #[test]
