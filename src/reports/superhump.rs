@@ -311,22 +311,21 @@ pub fn growth(t: &[f64], m1: &[f64], osc: &[f64], m2: &[f64], r_disk: &[f64]) ->
     let e_peak = es[peak];
     (g.e_peak, g.peak_orbit) = (e_peak, t[peak]);
     // The onset, floor and fit are searched after the set-up's relaxation as the peak is:
-    // a transient in the first orbits must not stand for the floor.
-    let onset = from
-        + es[from..=peak]
+    // a transient in the first orbits must not stand for the floor. The first row there at
+    // `share` of the peak (the peak itself qualifies).
+    let first_at = |share: f64| {
+        from + es[from..=peak]
             .iter()
-            .position(|e| *e >= 0.5 * e_peak)
-            .unwrap_or(peak - from);
+            .position(|e| *e >= share * e_peak)
+            .unwrap_or(peak - from)
+    };
+    let onset = first_at(0.5);
     g.e_floor = es[from..onset.max(from + 1)]
         .iter()
         .copied()
         .filter(|x| x.is_finite())
         .fold(f64::INFINITY, f64::min);
-    let start = from
-        + es[from..=peak]
-            .iter()
-            .position(|e| *e >= 0.8 * e_peak)
-            .unwrap_or(peak - from);
+    let start = first_at(0.8);
     let end = es.iter().rposition(|e| *e >= 0.5 * e_peak).unwrap_or(peak);
     g.eccentric = e_peak >= ECCENTRIC_MIN
         && e_peak >= 3.0 * g.e_floor
@@ -344,11 +343,7 @@ pub fn growth(t: &[f64], m1: &[f64], osc: &[f64], m2: &[f64], r_disk: &[f64]) ->
     g.r_disk_at_onset = r_disk[onset].is_finite().then_some(r_disk[onset]);
     let low = (e_peak / 8.0).max(1.5 * g.e_floor);
     let a = from + es[from..onset].iter().rposition(|e| *e <= low).unwrap_or(0);
-    let b = from
-        + es[from..=peak]
-            .iter()
-            .position(|e| *e >= 0.7 * e_peak)
-            .unwrap_or(onset - from);
+    let b = first_at(0.7);
     // The logistic de/dt = γ e (1 − e/e_peak) has ln(e/(e_peak − e)) = γ t + const exactly.
     let (x, y): (Vec<f64>, Vec<f64>) = (a..=b)
         .filter(|&k| es[k] > 0.0 && es[k] < e_peak)
