@@ -110,6 +110,16 @@ fn a_precessing_eccentric_ring_gives_its_growth_precession_and_superhump() {
     // A ring on one ellipse: the m = 1 phase follows the periastron, and is the source.
     assert_eq!(json["precession"]["source"], "m1_phase", "{json}");
     assert!((num(&json["epsilon"]) - (beat - 1.0)).abs() < 3.0 * eps_err);
+    // The hump is the beat's cosine, locked to the apsidal line: no drift within three of
+    // its errors (each 4-orbit window's phase carries ~3° from the noise), and the beat
+    // with the drift gives the light curve's ε.
+    let h = &json["hump_phase"];
+    let (drift, drift_err) = (num(&h["drift_deg_per_orbit"]), num(&h["drift_err"]));
+    assert!(drift.abs() < 3.0 * drift_err && drift_err < 0.5, "{h}");
+    assert!(
+        (num(&h["epsilon_locked"]) - (beat - 1.0)).abs() < 3.0 * num(&h["epsilon_locked_err"]),
+        "{h}"
+    );
     // The predictions for q = 0.1 (analysis::roche: Patterson 0.18 q + 0.29 q²).
     assert!((num(&json["predictions"]["epsilon_patterson2005"]) - 0.0209).abs() < 1e-12);
     for png in [

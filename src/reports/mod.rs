@@ -6,6 +6,7 @@
 pub mod cv;
 pub mod cv_accretion;
 pub mod disk;
+pub mod hump_phase;
 pub mod lightcurve;
 pub mod outbursts;
 pub mod ring;

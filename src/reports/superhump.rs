@@ -38,6 +38,11 @@
 //!   (`reports::lightcurve`): the superhump period P_sh with its error,
 //!   ε = (P_sh − P_orb)/P_orb, the modulation's semi-amplitude relative to the trend and its
 //!   peak-to-peak amplitude in magnitudes.
+//! - **The hump against the apsidal line** (`reports::hump_phase`): the phase of the light
+//!   curve's modulation against the turning-frame longitude of periastron, in windows of a
+//!   few orbits; its drift per orbit and the ε that the beat and the drift predict together
+//!   (a hump that moves along the beat cycle makes P_sh differ from the beat; a note says so
+//!   where they differ by more than three errors).
 //! - **Beside them:** the dynamical ε of the precession at r_3:1 and at the disk's radius
 //!   (R90) at the onset (Hirose & Osaki 1990, `analysis::roche::precession_rate`), and the
 //!   observed relations ε(q) of Patterson et al. (2005) and Kato et al. (2009).
@@ -59,6 +64,7 @@ use serde::Serialize;
 use crate::analysis::roche;
 use crate::io::atomic::write_atomic;
 use crate::render::plot::{PALETTE, Panel, Series, SeriesStyle, plot_panels};
+use crate::reports::hump_phase::{HumpPhase, hump_phase};
 use crate::reports::lightcurve::{self, LightcurveFigures};
 
 /// Header of `modes.csv`.
@@ -208,6 +214,9 @@ pub struct SuperhumpFigures {
     /// (P_sh − P_beat)/P_sh: the light curve's period against the beat of the measured
     /// precession with the orbit.
     pub beat_mismatch: Option<f64>,
+    /// The hump's phase against the apsidal line, its drift, and the ε the beat and the
+    /// drift predict together (`reports::hump_phase`).
+    pub hump_phase: Option<HumpPhase>,
     pub predictions: Option<Predictions>,
     pub notes: Vec<String>,
 }
@@ -583,6 +592,21 @@ pub fn analyse(
         (Some(l), Some(p)) => Some((l.period_orbits - p.beat_period_orbits) / l.period_orbits),
         _ => None,
     };
+    let hump = prec
+        .as_ref()
+        .and_then(|p| hump_phase(&p.points, p.rate, p.rate_err, &light, from, to));
+    if let (Some(l), Some(p), Some(h)) = (&lc, &prec, &hump) {
+        let apart = (l.period_excess - p.epsilon_beat).abs();
+        if apart > 3.0 * l.period_excess_err.hypot(p.epsilon_beat_err) {
+            notes.push(format!(
+                "the light curve's ε ({}) and the beat's ({}) differ by {apart:.4}: the hump moves along the beat cycle by {}° per orbit, and the beat with that drift gives ε = {}",
+                lightcurve::plus_minus(l.period_excess, l.period_excess_err),
+                lightcurve::plus_minus(p.epsilon_beat, p.epsilon_beat_err),
+                lightcurve::plus_minus(h.drift_deg_per_orbit, h.drift_err),
+                lightcurve::plus_minus(h.epsilon_locked, h.epsilon_locked_err)
+            ));
+        }
+    }
     if let Some(l) = &lc {
         notes.extend(l.notes.iter().map(|n| format!("light curve: {n}")));
     }
@@ -597,6 +621,7 @@ pub fn analyse(
         precession: prec,
         lightcurve: lc,
         beat_mismatch,
+        hump_phase: hump,
         predictions,
         notes,
     })
@@ -717,6 +742,15 @@ impl SuperhumpReport {
         }
         if let Some(m) = f.beat_mismatch {
             s += &format!("  (P_sh − P_beat)/P_sh = {m:+.4}\n");
+        }
+        if let Some(h) = &f.hump_phase {
+            s += &format!(
+                "  hump against the apsidal line: drifts {}° per orbit ({} windows of {} orbits); beat with the drift: ε = {}\n",
+                lightcurve::plus_minus(h.drift_deg_per_orbit, h.drift_err),
+                h.phases.len(),
+                h.window_orbits,
+                lightcurve::plus_minus(h.epsilon_locked, h.epsilon_locked_err)
+            );
         }
         if let Some(p) = &f.predictions {
             s += &format!(
@@ -867,13 +901,13 @@ fn precession_panel(p: &Precession) -> Panel {
 /// The table of a q series (one row per run, sorted by q): CSV text.
 pub fn scan_csv(reports: &[(f64, &SuperhumpFigures)]) -> String {
     let mut s = String::from(
-        "q,eccentric,e_peak,peak_orbit,e_saturated,e_end,faded,onset_orbit,e_folding_orbits,r_disk_at_onset,epsilon,epsilon_err,epsilon_beat,epsilon_beat_err,precession_source,amplitude_mag,epsilon_dynamical_r31,epsilon_dynamical_r_disk,epsilon_patterson2005,epsilon_kato2009\n",
+        "q,eccentric,e_peak,peak_orbit,e_saturated,e_end,faded,onset_orbit,e_folding_orbits,r_disk_at_onset,epsilon,epsilon_err,epsilon_beat,epsilon_beat_err,hump_drift_deg_per_orbit,epsilon_locked,precession_source,amplitude_mag,epsilon_dynamical_r31,epsilon_dynamical_r_disk,epsilon_patterson2005,epsilon_kato2009\n",
     );
     let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6}"));
     for (q, f) in reports {
         let p = f.precession.as_ref();
         s.push_str(&format!(
-            "{q},{},{:.6},{:.2},{},{:.6},{},{},{},{},{},{},{},{},{},{},{:.6},{},{:.6},{:.6}\n",
+            "{q},{},{:.6},{:.2},{},{:.6},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{},{:.6},{:.6}\n",
             f.growth.eccentric,
             f.growth.e_peak,
             f.growth.peak_orbit,
@@ -888,6 +922,8 @@ pub fn scan_csv(reports: &[(f64, &SuperhumpFigures)]) -> String {
             o(f.epsilon_err.filter(|_| f.growth.eccentric)),
             o(p.map(|p| p.epsilon_beat)),
             o(p.map(|p| p.epsilon_beat_err)),
+            o(f.hump_phase.as_ref().map(|h| h.drift_deg_per_orbit)),
+            o(f.hump_phase.as_ref().map(|h| h.epsilon_locked)),
             p.map_or("", |p| match p.source {
                 PrecessionSource::M1Phase => "m1_phase",
                 PrecessionSource::Osculating => "osculating",
