@@ -31,7 +31,10 @@
 //!   mass in the window stops following the periastron and flips with the binary's tide;
 //!   a longitude more than 1% of whose row-to-row steps exceed 45° ([`JUMP_DEG`],
 //!   [`MAX_JUMP_FRACTION`]) is not a periastron, and the rate is then the osculating one
-//!   (`source` says which; a note says why). Where both follow the periastron but
+//!   (`source` says which; a note says why). So is one whose longitude wanders more than
+//!   [`MAX_SLIP_DEG`] from the osculating one's: where the disk is strongly distorted for a
+//!   while, the m = 1 pattern can turn with the binary in steps smaller than a jump and
+//!   slip whole turns. Where both follow the periastron but
 //!   disagree by more than 10% and three errors, a note says so.
 //! - **Light curve.** The dissipation light curve of the same active stretch, its
 //!   periodogram searched between [`PERIOD_RANGE`] P_orb with a floating cubic trend
@@ -165,6 +168,10 @@ pub struct Precession {
     pub rate_m1_phase: f64,
     pub rate_m1_phase_err: f64,
     pub m1_phase_jumps: f64,
+    /// How far the m = 1 phase's longitude wanders from the osculating one's over the
+    /// stretch (2%–98% range of their difference, degrees; NaN where the osculating one
+    /// does not follow the periastron).
+    pub m1_phase_slip_deg: f64,
     /// The same from the osculating eccentricity vector's longitude.
     pub rate_osculating: f64,
     pub rate_osculating_err: f64,
@@ -397,6 +404,14 @@ pub const JUMP_DEG: f64 = 45.0;
 /// A longitude whose steps are jumps more often than this does not follow the periastron.
 pub const MAX_JUMP_FRACTION: f64 = 0.01;
 
+/// The m = 1 phase follows the periastron only while its longitude stays within this many
+/// degrees of the osculating one's (the range of their difference): a slip of half a turn
+/// or more is the m = 1 pattern turning with the binary for a while, in steps too small to
+/// count as jumps (a tide-held pattern moves 7° per row at 50 rows per orbit). Eccentric
+/// disks whose two longitudes agree wander 44–68° (3D and 2D runs of `superhump.toml`,
+/// 1–5 turns); the supercycle run whose m = 1 phase slipped, 3 292°.
+pub const MAX_SLIP_DEG: f64 = 180.0;
+
 /// A straight line fitted to one unwrapped longitude track (degrees against time).
 #[derive(Clone, Debug)]
 struct Track {
@@ -462,7 +477,23 @@ pub fn precession(rows: &[ModesRow], from: f64, to: f64) -> Option<Precession> {
     let osc: Vec<f64> = used.iter().map(|r| r.periastron_inertial_deg).collect();
     let m1 = Track::fit(&t, &m1)?;
     let osc = Track::fit(&t, &osc).filter(|_| osc.iter().all(|x| x.is_finite()));
-    let (source, chosen) = if m1.follows_periastron() {
+    // The m = 1 phase against the osculating periastron: their difference, from its 2% to
+    // its 98% quantile (a few rows of noise aside), stays within degrees while both follow
+    // the periastron, and grows by whole turns where the m = 1 pattern is held by the tide
+    // in the turning frame and turns with it (module doc).
+    let slip = osc.as_ref().filter(|o| o.follows_periastron()).map(|o| {
+        let mut d: Vec<f64> = m1
+            .unwrapped
+            .iter()
+            .zip(&o.unwrapped)
+            .map(|(a, b)| a - b)
+            .collect();
+        d.sort_by(f64::total_cmp);
+        let at = |f: f64| d[((d.len() - 1) as f64 * f).round() as usize];
+        at(0.98) - at(0.02)
+    });
+    let m1_follows = m1.follows_periastron() && slip.is_none_or(|s| s <= MAX_SLIP_DEG);
+    let (source, chosen) = if m1_follows {
         (PrecessionSource::M1Phase, &m1)
     } else {
         match &osc {
@@ -480,6 +511,7 @@ pub fn precession(rows: &[ModesRow], from: f64, to: f64) -> Option<Precession> {
         rate_m1_phase: m1.rate,
         rate_m1_phase_err: m1.rate_err,
         m1_phase_jumps: m1.jumps,
+        m1_phase_slip_deg: slip.unwrap_or(f64::NAN),
         rate_osculating: osc.as_ref().map_or(f64::NAN, |o| o.rate),
         rate_osculating_err: osc.as_ref().map_or(f64::NAN, |o| o.rate_err),
         osculating_jumps: osc.as_ref().map_or(f64::NAN, |o| o.jumps),
@@ -537,8 +569,9 @@ pub fn analyse(
             100.0 * MAX_JUMP_FRACTION
         )),
         Some(p) if p.source == PrecessionSource::Osculating => notes.push(format!(
-            "the m = 1 phase does not follow the periastron ({:.1}% of its row-to-row steps jump by more than {JUMP_DEG}°; its slope would give ω_p = {:.4} Ω_orb): the precession is the osculating eccentricity vector's",
+            "the m = 1 phase does not follow the periastron ({:.1}% of its row-to-row steps jump by more than {JUMP_DEG}°, its longitude wanders {:.0}° from the osculating one's; its slope would give ω_p = {:.4} Ω_orb): the precession is the osculating eccentricity vector's",
             100.0 * p.m1_phase_jumps,
+            p.m1_phase_slip_deg,
             p.rate_m1_phase
         )),
         Some(p)
@@ -1033,7 +1066,8 @@ mod tests {
             m1_phase_deg: phase,
             m2: 0.01,
             e: m1,
-            periastron_inertial_deg: 0.0,
+            // No osculating longitude unless a test sets one.
+            periastron_inertial_deg: f64::NAN,
         }
     }
 
@@ -1197,6 +1231,48 @@ mod tests {
         assert!((p.epsilon_beat - w / (1.0 - w)).abs() < 1.1e-3);
         // The error reflects the scatter of the osculating track, not the m = 1 phase's.
         assert!(p.rate_err < 1e-3, "{}", p.rate_err);
+    }
+
+    #[test]
+    fn an_m1_phase_that_slips_turns_with_the_tide_does_not_give_the_precession() {
+        // As the supercycle run's superoutburst wrote it: the m = 1 phase follows the
+        // apoastron but for two orbits in which the distorted disk's m = 1 pattern is held
+        // by the binary at a fixed turning-frame azimuth, turning with it 7.2° per row —
+        // no step a jump (two steps of the 2000 are) — so its longitude slips two turns
+        // against the osculating periastron's, and its slope over 40 orbits would read
+        // ω_p = w + 0.05.
+        let w = 0.025;
+        let mut rows = distorted_rows(w);
+        for r in rows.iter_mut() {
+            let orbit = r.t / TAU;
+            let turning_peri = r.periastron_inertial_deg - r.t.to_degrees();
+            r.m1_phase_deg = if (10.0..12.0).contains(&orbit) {
+                75.0
+            } else {
+                turning_peri + 180.0
+            }
+            .rem_euclid(360.0);
+        }
+        let p = precession(&rows, 0.0, f64::INFINITY).unwrap();
+        assert!(
+            p.m1_phase_jumps <= MAX_JUMP_FRACTION,
+            "{}",
+            p.m1_phase_jumps
+        );
+        assert!(p.m1_phase_slip_deg > 600.0, "{}", p.m1_phase_slip_deg);
+        assert_eq!(p.source, PrecessionSource::Osculating);
+        // The osculating track's noise: as in the distorted disk's test.
+        assert!((p.rate - w).abs() < 1e-3, "{} ± {}", p.rate, p.rate_err);
+        // Without the slip the same m = 1 phase is the source, and agrees.
+        let mut clean = distorted_rows(w);
+        for r in clean.iter_mut() {
+            r.m1_phase_deg =
+                (r.periastron_inertial_deg - r.t.to_degrees() + 180.0).rem_euclid(360.0);
+        }
+        let p = precession(&clean, 0.0, f64::INFINITY).unwrap();
+        assert_eq!(p.source, PrecessionSource::M1Phase);
+        assert!(p.m1_phase_slip_deg < 1.0, "{}", p.m1_phase_slip_deg);
+        assert!((p.rate - w).abs() < 1e-3);
     }
 
     #[test]
