@@ -26,6 +26,7 @@ use std::f64::consts::TAU;
 use serde::Serialize;
 
 use crate::reports::lightcurve::Row;
+use crate::reports::superhump::{line_fit, unwrap_deg};
 
 /// Length of the windows in which the hump's phase is fitted, in orbits: a few beat cycles,
 /// long against the 1/f_sh − 1/f_beat mismatch that a window of one cycle could not tell
@@ -69,17 +70,14 @@ fn window_phase(orbit: &[f64], l: &[f64], psi_deg: &[f64]) -> Option<(f64, f64)>
     if n < 8 {
         return None;
     }
-    let nf = n as f64;
-    let (mt, ml) = (orbit.iter().sum::<f64>() / nf, l.iter().sum::<f64>() / nf);
-    let stt: f64 = orbit.iter().map(|t| (t - mt).powi(2)).sum();
-    let stl: f64 = orbit.iter().zip(l).map(|(t, y)| (t - mt) * (y - ml)).sum();
-    if !(stt > 0.0 && ml != 0.0) {
+    let ml = l.iter().sum::<f64>() / n as f64;
+    let (a0, slope) = line_fit(orbit, l)?;
+    if ml == 0.0 {
         return None;
     }
-    let slope = stl / stt;
     let (mut cc, mut ss, mut cs, mut cy, mut sy) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for k in 0..n {
-        let y = l[k] - ml - slope * (orbit[k] - mt);
+        let y = l[k] - a0 - slope * orbit[k];
         let (s, c) = psi_deg[k].to_radians().sin_cos();
         cc += c * c;
         ss += s * s;
@@ -137,19 +135,19 @@ pub fn hump_phase(
     if phases.len() < MIN_WINDOWS {
         return None;
     }
-    // Unwrap φ by the shortest step from window to window.
-    for k in 1..phases.len() {
-        let prev = phases[k - 1].1;
-        phases[k].1 = prev + (phases[k].1 - prev + 180.0).rem_euclid(360.0) - 180.0;
+    let t: Vec<f64> = phases.iter().map(|p| p.0).collect();
+    let phi = unwrap_deg(&phases.iter().map(|p| p.1).collect::<Vec<f64>>());
+    for (p, u) in phases.iter_mut().zip(&phi) {
+        p.1 = *u;
     }
-    let n = phases.len() as f64;
-    let mt = phases.iter().map(|p| p.0).sum::<f64>() / n;
-    let mp = phases.iter().map(|p| p.1).sum::<f64>() / n;
-    let stt: f64 = phases.iter().map(|p| (p.0 - mt).powi(2)).sum();
-    let drift = phases.iter().map(|p| (p.0 - mt) * (p.1 - mp)).sum::<f64>() / stt;
-    let rss: f64 = phases
+    let (a, drift) = line_fit(&t, &phi)?;
+    let n = t.len() as f64;
+    let mt = t.iter().sum::<f64>() / n;
+    let stt: f64 = t.iter().map(|x| (x - mt).powi(2)).sum();
+    let rss: f64 = t
         .iter()
-        .map(|p| (p.1 - mp - drift * (p.0 - mt)).powi(2))
+        .zip(&phi)
+        .map(|(x, y)| (y - a - drift * x).powi(2))
         .sum();
     let drift_err = (rss / (n - 2.0) / stt).sqrt();
     let f = (1.0 - rate) + drift / 360.0;

@@ -268,7 +268,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Least-squares line y = a + b x: (a, b).
-fn line_fit(x: &[f64], y: &[f64]) -> Option<(f64, f64)> {
+pub(crate) fn line_fit(x: &[f64], y: &[f64]) -> Option<(f64, f64)> {
     let n = x.len() as f64;
     if x.len() < 2 {
         return None;
@@ -280,7 +280,7 @@ fn line_fit(x: &[f64], y: &[f64]) -> Option<(f64, f64)> {
 }
 
 /// Unwraps angles in degrees (steps below 180° in size are taken as the path).
-fn unwrap_deg(a: &[f64]) -> Vec<f64> {
+pub(crate) fn unwrap_deg(a: &[f64]) -> Vec<f64> {
     let mut out = Vec::with_capacity(a.len());
     let mut offset = 0.0;
     for (k, &x) in a.iter().enumerate() {
