@@ -168,16 +168,11 @@ mod tests {
     use super::*;
 
     /// A disk precessing at `w` Ω_orb (its periastron's inertial longitude 30° + w Ω t) and a
-    /// light curve L = 1 + 0.2 cos(ψ − φ(t)), φ(t) = 40° + `drift` · orbit, with seeded noise
-    /// of ±0.05: rows every 0.02 orbit over 60 orbits.
+    /// light curve L = 1 + 0.2 cos(ψ − φ(t)), φ(t) = 40° + `drift` · orbit, with seeded uniform
+    /// noise of ±0.05: rows every 0.02 orbit over 60 orbits.
     fn disk(w: f64, drift: f64) -> (Vec<(f64, f64)>, Vec<Row>) {
-        let mut seed = 99u64;
-        let mut noise = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rng = crate::rng::Rng::new(99);
+        let mut noise = move || rng.uniform() - 0.5;
         let track: Vec<(f64, f64)> = (0..=600)
             .map(|k| {
                 let orbit = k as f64 * 0.1;

@@ -1188,15 +1188,10 @@ mod tests {
     /// wrote them: the m = 1 phase no longer follows the periastron but is held by the
     /// binary, flipping between 30° and 210° in the turning frame every half orbit, while
     /// the osculating eccentricity vector's longitude precesses at `w` with a few degrees
-    /// of noise (a seeded LCG).
+    /// of noise (seeded).
     fn distorted_rows(w: f64) -> Vec<ModesRow> {
-        let mut seed = 12345u64;
-        let mut noise = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rng = crate::rng::Rng::new(12345);
+        let mut noise = move || rng.uniform() - 0.5;
         (0..2000)
             .map(|k| {
                 let t = k as f64 * TAU / 50.0;
