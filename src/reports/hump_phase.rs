@@ -33,7 +33,8 @@ use crate::reports::superhump::{line_fit, unwrap_deg};
 /// from noise, short against the stretch (tens of orbits) over which the drift is fitted.
 pub const WINDOW_ORBITS: f64 = 4.0;
 
-/// Fewest windows for a drift: a line through three points has one degree of freedom.
+/// Fewest windows for a drift and its error: four leave the line's error two degrees of
+/// freedom.
 pub const MIN_WINDOWS: usize = 4;
 
 /// The hump's phase against the apsidal line and its drift.
