@@ -2,7 +2,8 @@
 //! problem file `cv2d.toml`, 1.5 orbits at a quarter of its stream rate) gives, per
 //! snapshot, a row of `cv_evolution.csv`, and `cv.json` with a disk between half the
 //! circularisation radius and the Roche lobe and a bright spot, and from `monitor.csv` where
-//! the stream's gas went (`cv_accretion.csv`, `.png`); a folder that is not a run
+//! the stream's gas went (`cv_accretion.csv`, `.png`), and how much of the stream passes
+//! the disk's rim (`cv_passage.csv`); a folder that is not a run
 //! fails with one line naming the file.
 
 mod common;
@@ -58,6 +59,29 @@ fn a_short_cv_run_gives_its_disk_and_bright_spot() {
     assert!((0.0..360.0).contains(&spot), "{spot}");
     // 2D: no overflow figures.
     assert!(json.get("overflow_fraction").is_none(), "{json:#}");
+    // The stream's passage through the rim, followed particle by particle
+    // (reports::cv_passage): a share of the arrived mass; no over/under split in 2D; the
+    // snapshots, half an orbit apart, are too coarse to trust it blindly, and a note says so.
+    let p = &json["passage"];
+    let f = p["passed_fraction"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("no passage figures: {json:#}"));
+    assert!((0.0..=1.0).contains(&f), "{p:#}");
+    assert!(p["arrived_particles"].as_u64().unwrap() > 0, "{p:#}");
+    assert!(p["over_under_fraction"].is_null(), "{p:#}");
+    assert!(
+        json["passage_notes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("orbit apart")),
+        "{json:#}"
+    );
+    assert!(
+        stdout.contains("the stream's passage through the rim"),
+        "{stdout}"
+    );
+    assert!(out.join("cv_passage.csv").is_file());
     // A row per snapshot (t = 0, 1, 2 × 3.14 and the end state), each with its time.
     let csv = std::fs::read_to_string(out.join("cv_evolution.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().collect();
@@ -98,4 +122,60 @@ fn a_folder_without_a_run_is_one_line_naming_the_file() {
     assert_eq!(code, 2);
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     assert!(err.contains("run.toml"), "{err}");
+}
+
+/// `problems/overflow3d.toml` for half an orbit with a snapshot every 0.05 orbit: the
+/// stream's passage through the rim is measured with its over/under and through parts,
+/// which add up to at most the passed fraction (the rest was found where the disk was too
+/// thin in particles to give a height); the re-impact lies inside the passing radius and
+/// outside the accretor; no note about coarse snapshots.
+#[test]
+fn a_short_overflow_run_gives_the_streams_passage_through_the_rim() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ovf");
+    let out_s = out.to_string_lossy().into_owned();
+    let problem = common::problem_file("overflow3d.toml");
+    let (code, _, err) = common::sphdisk_cli(
+        None,
+        &[
+            "run",
+            &problem,
+            "--set",
+            "time.end=3.1416",
+            "--out",
+            &out_s,
+            "--quiet",
+        ],
+    );
+    assert_eq!(code, 0, "run: {err}");
+    let (code, stdout, err) = common::sphdisk_cli(None, &["analyse", "cv", &out_s]);
+    assert_eq!(code, 0, "analyse: {err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    let p = &json["passage"];
+    let num = |k: &str| {
+        p[k].as_f64()
+            .unwrap_or_else(|| panic!("{k} is not a number in {json:#}"))
+    };
+    let (passed, over, through) = (
+        num("passed_fraction"),
+        num("over_under_fraction"),
+        num("through_fraction"),
+    );
+    assert!(passed > 0.0 && passed <= 1.0, "{p:#}");
+    assert!(over >= 0.0 && through >= 0.0, "{p:#}");
+    assert!(over + through <= passed + 1e-12, "{p:#}");
+    let (r, r90) = (num("reimpact_radius"), num("reimpact_radius_over_r90"));
+    assert!(
+        r > 0.1 && r90 < 0.75,
+        "re-impact at {r} a = {r90} R90: {p:#}"
+    );
+    assert!(
+        json["passage_notes"].as_array().unwrap().is_empty(),
+        "{json:#}"
+    );
+    assert!(
+        stdout.contains("passes the rim instead of stopping there"),
+        "{stdout}"
+    );
 }

@@ -32,7 +32,10 @@
 //!   mass-weighted rms z of disk gas with R in [0.9, 1.1] R90), the fraction of the stream
 //!   mass in that rim annulus that lies above +H or below −H, and where gas that passes over
 //!   or under the rim comes closest to the accretor (the re-impact region of the paper's
-//!   Figure 5).
+//!   Figure 5). This is where stream gas *lies* in one snapshot; how much of the stream
+//!   *passes* the rim instead of stopping there — the paper's 10–20% — is a flux, measured
+//!   by following the particles' ids through the snapshots (`reports::cv_passage`, in 2D
+//!   too: there it is gas going through the rim).
 //!
 //! What cannot be measured (no disk yet, no stream gas near it) is `None`: null in
 //! `cv.json`, an empty cell in `cv_evolution.csv`, with a line in `notes` saying why.
@@ -40,7 +43,8 @@
 //! Writes into the run folder `cv_evolution.csv` (a row per snapshot, columns as
 //! [`CvFigures::columns`]; `days` only if `run.toml` gives `binary.period_days`, the
 //! overflow columns only in 3D) and `cv.json` (the run's reference radii and the last
-//! snapshot's figures, [`CvJson`]); and from `monitor.csv`, where the stream's gas went
+//! snapshot's figures, [`CvJson`], with the passage figures under `passage`),
+//! `cv_passage.csv` (the passing fraction per orbit of arrival); and from `monitor.csv`, where the stream's gas went
 //! over time and whether the disk has become steady (`reports::cv_accretion`):
 //! `cv_accretion.csv`, `cv_accretion.png` and the key `accretion` of `cv.json`.
 
@@ -61,6 +65,7 @@ use crate::physics::binary::{Binary, Region};
 use crate::problems::cv::ECCENTRICITY_WINDOW;
 use crate::render::plot::plot_panels;
 use crate::reports::cv_accretion::{self, AccretionFigures};
+use crate::reports::cv_passage::{self, PassageFigures, PassageTracker};
 use crate::reports::run_config;
 
 /// The annulus, in units of R90, whose 10° sectors are searched for the brightest one.
@@ -185,6 +190,11 @@ pub struct CvJson {
     /// Where the stream's gas went, window by window, from `monitor.csv`
     /// (`reports::cv_accretion`); `None` without that file or a stream.
     pub accretion: Option<AccretionFigures>,
+    /// The stream's passage through the rim, particle by particle (`reports::cv_passage`);
+    /// None when no stream gas reached the rim early enough to be counted.
+    pub passage: Option<PassageFigures>,
+    /// Why the passage figures are missing or how far to trust them.
+    pub passage_notes: Vec<String>,
     #[serde(flatten)]
     pub last: CvFigures,
 }
@@ -217,6 +227,7 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
     }
     let mut rows = Vec::with_capacity(files.len());
     let mut samples = Vec::with_capacity(files.len());
+    let mut passage = PassageTracker::new();
     for (name, _) in &files {
         let path = run.join(name);
         let snap = read_snapshot_with_h(&path)?.in_run_frame();
@@ -230,6 +241,7 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
         let disk = disk_mask(&b, &snap);
         let mut f = snapshot_figures_of_disk(&b, &snap, period_days, &disk);
         f.snapshot.clone_from(name);
+        passage.feed(&b, &snap, &disk, f.disk_radius_90);
         samples.push(cv_accretion::DiskSample {
             orbit: f.orbit,
             radius_mass: (0..snap.len())
@@ -265,6 +277,13 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
         plot_panels(&png, (1000, 900), &cv_accretion::panels(a))?;
         files.push(png);
     }
+    let mut passage_notes = Vec::new();
+    let passage = passage.finish(&mut passage_notes);
+    if let Some(p) = &passage {
+        let path = run.join("cv_passage.csv");
+        write_atomic(&path, cv_passage::windows_csv(&p.windows).as_bytes())?;
+        files.push(path);
+    }
     let r_min_point = *ballistic_stream(q, 0.0).last().expect("starts at L1");
     let json = CvJson {
         run: run.display().to_string(),
@@ -281,6 +300,8 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
         tidal_radius: roche::tidal_radius(q),
         r_31: roche::r_31(q),
         accretion,
+        passage,
+        passage_notes,
         last: rows.last().cloned().expect("at least one snapshot"),
     };
     let json_path = run.join("cv.json");
@@ -527,6 +548,12 @@ impl CvReport {
                 );
             }
         }
+        if let Some(p) = &j.passage {
+            let _ = writeln!(s, "{}", p.summary_line());
+        }
+        for n in &j.passage_notes {
+            let _ = writeln!(s, "note (passage): {n}");
+        }
         for r in &self.rows {
             for n in &r.notes {
                 let _ = writeln!(s, "note ({}): {n}", r.snapshot);
@@ -595,7 +622,7 @@ pub fn mass_radius(s: &Snapshot, fraction: f64, pick: impl Fn(usize) -> bool) ->
 
 /// The mass-weighted median of azimuths (degrees): offsets from the weighted circular mean
 /// direction, wrapped to (−180, 180], have their median added back to it.
-fn circular_median_deg(am: &[(f64, f64)]) -> Option<f64> {
+pub(crate) fn circular_median_deg(am: &[(f64, f64)]) -> Option<f64> {
     let (mut c, mut sn) = (0.0, 0.0);
     for &(a, m) in am {
         let (s, co) = a.to_radians().sin_cos();

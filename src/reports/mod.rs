@@ -5,6 +5,7 @@
 
 pub mod cv;
 pub mod cv_accretion;
+pub mod cv_passage;
 pub mod disk;
 pub mod hump_phase;
 pub mod lightcurve;
