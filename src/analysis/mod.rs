@@ -12,6 +12,15 @@ pub mod viscous_disk;
 
 use crate::particles::Particles;
 
+/// The standard error of the mean of `values`: their sample standard deviation (n − 1)
+/// over √n; NaN for fewer than two values.
+pub fn standard_error(values: &[f64]) -> f64 {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    var.sqrt() / n.sqrt()
+}
+
 /// The `fraction` quantile of values weighted by masses, (value, mass) pairs: the value at
 /// which the mass sorted by value reaches `fraction` of the total; None without mass.
 pub fn weighted_quantile(mut vm: Vec<(f64, f64)>, fraction: f64) -> Option<f64> {
@@ -239,6 +248,15 @@ pub fn peak_position(profile: &[(f64, f64)]) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// 1, 2, 3, 4: sample variance 5/3, so the standard error is √(5/3)/2; one value has none.
+    #[test]
+    fn standard_error_of_four_values() {
+        assert!(
+            (standard_error(&[1.0, 2.0, 3.0, 4.0]) - (5.0f64 / 3.0).sqrt() / 2.0).abs() < 1e-15
+        );
+        assert!(standard_error(&[1.0]).is_nan());
+    }
 
     #[test]
     fn crossing_interpolates_between_bins() {

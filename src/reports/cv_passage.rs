@@ -35,7 +35,7 @@ use std::f64::consts::TAU;
 
 use serde::Serialize;
 
-use crate::analysis::weighted_quantile;
+use crate::analysis::{standard_error, weighted_quantile};
 use crate::io::snapshot::Snapshot;
 use crate::physics::binary::{Binary, STREAM_ECCENTRICITY};
 use crate::reports::cv::{MIN_RIM_PARTICLES, RIM, azimuth_deg};
@@ -243,16 +243,8 @@ impl PassageTracker {
                 })
             })
             .collect();
-        let error = (windows.len() >= 2).then(|| {
-            let n = windows.len() as f64;
-            let mean = windows.iter().map(|w| w.passed_fraction).sum::<f64>() / n;
-            let var = windows
-                .iter()
-                .map(|w| (w.passed_fraction - mean).powi(2))
-                .sum::<f64>()
-                / (n - 1.0);
-            (var / n).sqrt()
-        });
+        let fractions: Vec<f64> = windows.iter().map(|w| w.passed_fraction).collect();
+        let error = (fractions.len() >= 2).then(|| standard_error(&fractions));
         let re: Vec<(f64, (f64, f64, f64))> = counted
             .iter()
             .filter_map(|(_, t)| t.reimpact.map(|r| (t.mass, r)))

@@ -436,9 +436,6 @@ impl Track {
                 line_fit(&t[r.clone()], &rad[r]).map(|f| f.1)
             })
             .collect();
-        let n = slopes.len() as f64;
-        let mean = slopes.iter().sum::<f64>() / n;
-        let sd = (slopes.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
         let jumps = unwrapped
             .windows(2)
             .filter(|w| (w[1] - w[0]).abs() > JUMP_DEG)
@@ -447,7 +444,7 @@ impl Track {
         Some(Track {
             unwrapped,
             rate,
-            rate_err: sd / n.sqrt(),
+            rate_err: crate::analysis::standard_error(&slopes),
             jumps,
         })
     }
