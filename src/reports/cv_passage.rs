@@ -30,7 +30,7 @@
 //! flight from the rim to the re-impact takes ~0.1 orbit, so a run meant for this writes a
 //! snapshot every [`MAX_INTERVAL_ORBITS`] orbit or more often (a note says when it does not).
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 
 use serde::Serialize;
@@ -115,7 +115,8 @@ pub struct PassageFigures {
 pub struct PassageTracker {
     /// Ids below this were in the first snapshot (the initial disk, releases at t = 0).
     first_stream_id: Option<u64>,
-    tracks: HashMap<u64, Track>,
+    /// By id: the sums over them come out in the same order every time.
+    tracks: BTreeMap<u64, Track>,
     times: Vec<f64>,
     three_d: bool,
 }
