@@ -8,38 +8,49 @@
 
 mod common;
 
-#[test]
-fn a_short_cv_run_gives_its_disk_and_bright_spot() {
+/// Runs the problem file `problem` through the CLI with `sets` (each `KEY=VALUE`) into a
+/// temporary folder, then `analyse cv` on it: the folder (kept alive), the run's path,
+/// the analysis's output and its `cv.json`.
+fn run_and_analyse(
+    problem: &str,
+    sets: &[&str],
+) -> (
+    tempfile::TempDir,
+    std::path::PathBuf,
+    String,
+    serde_json::Value,
+) {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("cv");
+    let out = dir.path().join("run");
     let out_s = out.to_string_lossy().into_owned();
-    let problem = common::problem_file("cv2d.toml");
-    let (code, _, err) = common::sphdisk_cli(
-        None,
-        &[
-            "run",
-            &problem,
-            "--set",
-            "stream.particles_per_orbit=500",
-            "--set",
-            "time.end=9.42",
-            "--set",
-            "output.interval=3.14",
-            "--out",
-            &out_s,
-            "--quiet",
-        ],
-    );
+    let problem = common::problem_file(problem);
+    let mut args = vec!["run", problem.as_str(), "--out", &out_s, "--quiet"];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    let (code, _, err) = common::sphdisk_cli(None, &args);
     assert_eq!(code, 0, "run: {err}");
-
     let (code, stdout, err) = common::sphdisk_cli(None, &["analyse", "cv", &out_s]);
     assert_eq!(code, 0, "analyse: {err}");
+    let json =
+        serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    (dir, out, stdout, json)
+}
+
+#[test]
+fn a_short_cv_run_gives_its_disk_and_bright_spot() {
+    let (_dir, out, stdout, json) = run_and_analyse(
+        "cv2d.toml",
+        &[
+            "stream.particles_per_orbit=500",
+            "time.end=9.42",
+            "output.interval=3.14",
+        ],
+    );
     assert!(
         stdout.contains("R90") && stdout.contains("cv.json"),
         "{stdout}"
     );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
     let num = |k: &str| {
         json[k]
             .as_f64()
@@ -131,27 +142,7 @@ fn a_folder_without_a_run_is_one_line_naming_the_file() {
 /// outside the accretor; no note about coarse snapshots.
 #[test]
 fn a_short_overflow_run_gives_the_streams_passage_through_the_rim() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("ovf");
-    let out_s = out.to_string_lossy().into_owned();
-    let problem = common::problem_file("overflow3d.toml");
-    let (code, _, err) = common::sphdisk_cli(
-        None,
-        &[
-            "run",
-            &problem,
-            "--set",
-            "time.end=3.1416",
-            "--out",
-            &out_s,
-            "--quiet",
-        ],
-    );
-    assert_eq!(code, 0, "run: {err}");
-    let (code, stdout, err) = common::sphdisk_cli(None, &["analyse", "cv", &out_s]);
-    assert_eq!(code, 0, "analyse: {err}");
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    let (_dir, _, stdout, json) = run_and_analyse("overflow3d.toml", &["time.end=3.1416"]);
     let p = &json["passage"];
     let num = |k: &str| {
         p[k].as_f64()
