@@ -44,8 +44,9 @@
 //! [`CvFigures::columns`]; `days` only if `run.toml` gives `binary.period_days`, the
 //! overflow columns only in 3D) and `cv.json` (the run's reference radii and the last
 //! snapshot's figures, [`CvJson`], with the passage figures under `passage`),
-//! `cv_passage.csv` (the passing fraction per orbit of arrival); and from `monitor.csv`, where the stream's gas went
-//! over time and whether the disk has become steady (`reports::cv_accretion`):
+//! `cv_passage.csv` (the passing fraction per orbit of arrival); and from `monitor.csv`,
+//! where the stream's gas went over time and whether the disk has become steady
+//! (`reports::cv_accretion`):
 //! `cv_accretion.csv`, `cv_accretion.png` and the key `accretion` of `cv.json`.
 
 use std::f64::consts::TAU;
@@ -241,7 +242,7 @@ pub fn analyse_cv(run: &Path) -> Result<CvReport> {
         let disk = disk_mask(&b, &snap);
         let mut f = snapshot_figures_of_disk(&b, &snap, period_days, &disk);
         f.snapshot.clone_from(name);
-        passage.feed(&b, &snap, &disk, f.disk_radius_90);
+        passage.feed(&snap, &disk, f.disk_radius_90);
         samples.push(cv_accretion::DiskSample {
             orbit: f.orbit,
             radius_mass: (0..snap.len())

@@ -37,7 +37,6 @@ use serde::Serialize;
 
 use crate::analysis::{standard_error, weighted_quantile};
 use crate::io::snapshot::Snapshot;
-use crate::physics::binary::{Binary, STREAM_ECCENTRICITY};
 use crate::reports::cv::{MIN_RIM_PARTICLES, RIM, azimuth_deg};
 
 /// Inside this many R90 a particle from beyond the rim has passed it (module doc): far
@@ -126,9 +125,10 @@ impl PassageTracker {
         Self::default()
     }
 
-    /// Takes one snapshot (in the run's frame) with its disk mask and R90 (None: no disk,
-    /// nothing arrives or passes).
-    pub fn feed(&mut self, b: &Binary, s: &Snapshot, disk: &[bool], r90: Option<f64>) {
+    /// Takes one snapshot (in the run's frame) with its disk mask (`cv::disk_mask`: true
+    /// where the orbit's eccentricity is below `STREAM_ECCENTRICITY`) and R90 (None: no
+    /// disk, nothing arrives or passes).
+    pub fn feed(&mut self, s: &Snapshot, disk: &[bool], r90: Option<f64>) {
         self.times.push(s.time);
         let first = *self
             .first_stream_id
@@ -140,9 +140,7 @@ impl PassageTracker {
         let heights = disk_heights(s, disk, r90);
         for i in (0..s.len()).filter(|&i| s.id[i] >= first) {
             let x = [s.pos[0][i], s.pos[1][i], s.pos[2][i]];
-            let v = [s.vel[0][i], s.vel[1][i], s.vel[2][i]];
             let r = x[0].hypot(x[1]);
-            let e = b.eccentricity(&x, &v);
             let t = self.tracks.entry(s.id[i]).or_insert(Track {
                 mass: s.mass[i],
                 outside: true,
@@ -151,10 +149,7 @@ impl PassageTracker {
             if t.arrived.is_none() && r <= RIM.1 * r90 {
                 t.arrived = Some(s.time);
             }
-            if t.passed.is_none()
-                && r < PASS_RADIUS * r90
-                && (t.outside || e >= STREAM_ECCENTRICITY)
-            {
+            if t.passed.is_none() && r < PASS_RADIUS * r90 && (t.outside || !disk[i]) {
                 t.arrived.get_or_insert(s.time);
                 let above = if s.dimension == 3 {
                     let k = (r / (H_BIN * r90)) as usize;
@@ -164,7 +159,7 @@ impl PassageTracker {
                 };
                 t.passed = Some(above);
             }
-            if t.passed.is_some() && t.reimpact.is_none() && e < STREAM_ECCENTRICITY {
+            if t.passed.is_some() && t.reimpact.is_none() && disk[i] {
                 t.reimpact = Some((r, r / r90, azimuth_deg(x[0], x[1])));
             }
             t.outside = r >= RIM.0 * r90;
@@ -342,7 +337,7 @@ impl PassageFigures {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::binary::BinaryParams;
+    use crate::physics::binary::{Binary, BinaryParams};
     use crate::reports::cv::disk_mask;
 
     /// One particle: id, position, inertial velocity about the accretor, mass.
@@ -430,7 +425,7 @@ mod tests {
 
         let mut t = PassageTracker::new();
         for s in &snaps {
-            t.feed(&b, s, &disk_mask(&b, s), Some(0.5));
+            t.feed(s, &disk_mask(&b, s), Some(0.5));
         }
         let mut notes = Vec::new();
         let f = t.finish(&mut notes).expect("twenty arrivals");
@@ -466,7 +461,7 @@ mod tests {
         let snaps = [snapshot(&b, 0.0, &base), snapshot(&b, 0.1, &p1)];
         let mut t = PassageTracker::new();
         for s in &snaps {
-            t.feed(&b, s, &disk_mask(&b, s), Some(0.5));
+            t.feed(s, &disk_mask(&b, s), Some(0.5));
         }
         let mut notes = Vec::new();
         assert_eq!(t.finish(&mut notes), None);
