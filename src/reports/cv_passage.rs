@@ -10,12 +10,15 @@
 //! is followed from snapshot to snapshot, with R90 the disk's 90%-mass radius of each:
 //!
 //! - it **arrives** at the first snapshot that finds it within `RIM.1` R90 of the accretor;
-//! - it **passes** the rim at the first snapshot that finds it inside [`PASS_RADIUS`] R90
-//!   when the snapshot before had it outside `RIM.0` R90 (or not yet released), or when it
-//!   is still on a stream orbit (eccentricity ≥ `STREAM_ECCENTRICITY`). Gas that stopped at
-//!   the rim joins the disk and drifts inward at the viscous speed ~ν/R (10⁻³ a Ω_orb for
-//!   ν = 7·10⁻⁴): from `RIM.0` to [`PASS_RADIUS`] R90 takes it tens of orbits, not one
-//!   snapshot interval;
+//! - it **passes** the rim at the first snapshot within [`SETTLE_ORBITS`] of its arrival
+//!   that finds it inside [`PASS_RADIUS`] R90 when the snapshot before had it outside
+//!   `RIM.0` R90 (or not yet released), or when it is still on a stream orbit
+//!   (eccentricity ≥ `STREAM_ECCENTRICITY`). Gas that stopped at the rim joins the disk and
+//!   drifts inward at the viscous speed ~ν/R (10⁻³ a Ω_orb for ν = 7·10⁻⁴): from `RIM.0` to
+//!   [`PASS_RADIUS`] R90 takes it tens of orbits, not one snapshot interval. The limit in
+//!   time keeps that drift out: in a hot disk (c_s a tenth of v_K) gas that stopped reads
+//!   e ≥ 0.3 now and then, and without it would count as passing whenever it drifted
+//!   inside [`PASS_RADIUS`] R90 later — a share growing with the run's length;
 //! - at that snapshot its height |z| is compared with the disk's own height H(R) there (the
 //!   mass-weighted rms z of disk gas in an annulus of width [`H_BIN`] R90 around R): gas
 //!   above H came **over or under** the disk, gas within H went **through** its rim (3D);
@@ -50,6 +53,8 @@ pub const H_BIN: f64 = 0.1;
 
 /// Particles that arrived later than this many orbits before the last snapshot are not
 /// counted: a passing particle needs ~0.1 orbit to get from the rim to [`PASS_RADIUS`].
+/// A particle passes within this time of its arrival or not at all (module doc), so the
+/// share does not depend on how long the run goes on after the arrivals.
 pub const SETTLE_ORBITS: f64 = 0.25;
 
 /// Longer snapshot intervals (orbits) can miss gas that passes and is accreted or
@@ -149,7 +154,10 @@ impl PassageTracker {
             if t.arrived.is_none() && r <= RIM.1 * r90 {
                 t.arrived = Some(s.time);
             }
-            if t.passed.is_none() && r < PASS_RADIUS * r90 && (t.outside || !disk[i]) {
+            let in_time = t
+                .arrived
+                .is_none_or(|a| s.time - a <= SETTLE_ORBITS * TAU * (1.0 + 1e-9));
+            if t.passed.is_none() && in_time && r < PASS_RADIUS * r90 && (t.outside || !disk[i]) {
                 t.arrived.get_or_insert(s.time);
                 let above = if s.dimension == 3 {
                     let k = (r / (H_BIN * r90)) as usize;
@@ -194,12 +202,12 @@ impl PassageTracker {
                 "snapshots up to {interval:.3} orbit apart (passage figures want ≤ {MAX_INTERVAL_ORBITS}): gas that passes the rim and is accreted between two snapshots is missed, and its height is taken after it struck the disk"
             ));
         }
+        // Sums start from +0: an empty f64 `sum()` is −0, which would read "-0.0".
         let mass = |pick: &dyn Fn(&Track) -> bool| -> f64 {
             counted
                 .iter()
                 .filter(|(_, t)| pick(t))
-                .map(|(_, t)| t.mass)
-                .sum()
+                .fold(0.0, |acc, (_, t)| acc + t.mass)
         };
         let arrived_mass = mass(&|_| true);
         let passed_mass = mass(&|t| t.passed.is_some());
@@ -224,12 +232,11 @@ impl PassageTracker {
                     })
                     .map(|(_, t)| *t)
                     .collect();
-                let m: f64 = inside.iter().map(|t| t.mass).sum();
-                let p: f64 = inside
+                let m = inside.iter().fold(0.0, |acc, t| acc + t.mass);
+                let p = inside
                     .iter()
                     .filter(|t| t.passed.is_some())
-                    .map(|t| t.mass)
-                    .sum();
+                    .fold(0.0, |acc, t| acc + t.mass);
                 (m > 0.0).then(|| PassageWindow {
                     orbit_start: if k + 1 == n_windows { o0 } else { start },
                     orbit_end: end,
@@ -245,7 +252,7 @@ impl PassageTracker {
             .iter()
             .filter_map(|(_, t)| t.reimpact.map(|r| (t.mass, r)))
             .collect();
-        let re_mass: f64 = re.iter().map(|(m, _)| m).sum();
+        let re_mass = re.iter().fold(0.0, |acc, (m, _)| acc + m);
         let az: Vec<(f64, f64)> = re.iter().map(|&(m, r)| (r.2, m)).collect();
         Some(PassageFigures {
             snapshot_interval_orbits: interval,
@@ -447,6 +454,78 @@ mod tests {
         let csv = windows_csv(&f.windows);
         assert!(csv.lines().all(|l| l.split(',').count() == 5));
         assert_eq!(csv.lines().count(), 1 + f.windows.len());
+    }
+
+    /// Gas that stopped at the rim and, much later, reads eccentric there (a hot disk's
+    /// turbulence) and then is found inside 0.75 R90 has not passed the rim: a passage
+    /// counts only within SETTLE_ORBITS of the arrival. Ten particles arrive at orbit 0.05
+    /// and sit circular at the rim until orbit 1.0, when they read eccentric (infalling) at
+    /// 0.48 a, and at orbit 1.05 are inside 0.75 R90; ten more pass at once (orbit 0.1).
+    #[test]
+    fn gas_that_stopped_does_not_pass_later() {
+        let b = Binary::new(&BinaryParams::with_q(0.1));
+        let base = disk(&b);
+        let first = base.len() as u64;
+        let with = |stoppers: &dyn Fn(u64) -> Part, passers: &dyn Fn(u64) -> Part| {
+            let mut p = base.clone();
+            p.extend((0..10).map(|k| stoppers(first + k)));
+            p.extend((10..20).map(|k| passers(first + k)));
+            p
+        };
+        let arriving = |id| infalling(id, 0.6, 200.0, 0.0);
+        let at_rim = |id| circular(&b, id, 0.48, 190.0, 0.0);
+        let passed = |id| circular(&b, id, 0.275, 30.0, 0.0);
+        let stages: Vec<(f64, Vec<Part>)> = vec![
+            (0.0, base.clone()),
+            (0.05, with(&arriving, &arriving)),
+            (0.1, with(&at_rim, &|id| infalling(id, 0.325, 150.0, 0.1))),
+            (0.3, with(&at_rim, &passed)),
+            (1.0, with(&|id| infalling(id, 0.48, 190.0, 0.0), &passed)),
+            (1.05, with(&|id| circular(&b, id, 0.3, 150.0, 0.0), &passed)),
+        ];
+        let mut t = PassageTracker::new();
+        for (orbit, parts) in &stages {
+            let s = snapshot(&b, *orbit, parts);
+            t.feed(&s, &disk_mask(&b, &s), Some(0.5));
+        }
+        let f = t.finish(&mut Vec::new()).expect("twenty arrivals");
+        assert_eq!(f.arrived_particles, 20);
+        // Exact: ratios of equal masses.
+        assert!((f.passed_fraction - 0.5).abs() < 1e-12, "{f:?}");
+    }
+
+    /// A stream that stops at the rim passes nothing: every share reads +0, not the −0 an
+    /// empty float sum gives (written "-0.0" to cv.json and "-0.0%" to the summary).
+    #[test]
+    fn a_stream_stopping_at_the_rim_passes_a_positive_zero() {
+        let b = Binary::new(&BinaryParams::with_q(0.1));
+        let base = disk(&b);
+        let first = base.len() as u64;
+        let mut p1 = base.clone();
+        p1.extend((0..10).map(|k| infalling(first + k, 0.6, 200.0, 0.0)));
+        let mut p2 = base.clone();
+        p2.extend((0..10).map(|k| circular(&b, first + k, 0.48, 190.0, 0.0)));
+        let mut p3 = base.clone();
+        p3.extend((0..10).map(|k| circular(&b, first + k, 0.47, 190.0, 0.0)));
+        let mut t = PassageTracker::new();
+        for (orbit, parts) in [(0.0, &base), (0.05, &p1), (0.1, &p2), (0.4, &p3)] {
+            let s = snapshot(&b, orbit, parts);
+            t.feed(&s, &disk_mask(&b, &s), Some(0.5));
+        }
+        let f = t.finish(&mut Vec::new()).expect("ten arrivals");
+        assert_eq!(f.arrived_particles, 10);
+        for share in [
+            f.passed_fraction,
+            f.over_under_fraction.unwrap(),
+            f.through_fraction.unwrap(),
+        ] {
+            assert!(share == 0.0 && share.is_sign_positive(), "{f:?}");
+        }
+        assert!(
+            f.windows
+                .iter()
+                .all(|w| w.passed_fraction.is_sign_positive())
+        );
     }
 
     /// Gas that has not yet had SETTLE_ORBITS to pass is not counted, and a run whose
