@@ -532,21 +532,7 @@ impl CvReport {
                 at(a.accretion_ninety_orbit)
             );
             if let Some(v) = &a.viscosity {
-                let _ = writeln!(
-                    s,
-                    "the steady disk's viscosity (orbits {:.1}–{:.1}, {} snapshots, Ṁ = {:.3} of the transfer rate): ν = {:.3e} a² Ω_orb, α_eff = {:.3} (R, ν, α_eff: {})",
-                    v.orbits.0,
-                    v.orbits.1,
-                    v.snapshots,
-                    v.accretion_share,
-                    v.nu,
-                    v.alpha_eff,
-                    v.bins
-                        .iter()
-                        .map(|(r, _, nu, al)| format!("{r:.3} {nu:.2e} {al:.2}"))
-                        .collect::<Vec<_>>()
-                        .join("; ")
-                );
+                let _ = writeln!(s, "{}", v.summary_line());
             }
         }
         if let Some(p) = &j.passage {

@@ -139,6 +139,35 @@ pub struct SteadyViscosity {
     pub alpha_eff: f64,
 }
 
+impl SteadyViscosity {
+    /// The line `analyse cv` prints; α_eff only where the gas is isothermal (else it
+    /// would read "NaN").
+    pub fn summary_line(&self) -> String {
+        let iso = self.alpha_eff.is_finite();
+        let bins = self
+            .bins
+            .iter()
+            .map(|(r, _, nu, al)| match iso {
+                true => format!("{r:.3} {nu:.2e} {al:.2}"),
+                false => format!("{r:.3} {nu:.2e}"),
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
+        let (alpha, columns) = match iso {
+            true => (format!(", α_eff = {:.3}", self.alpha_eff), "R, ν, α_eff"),
+            false => (
+                " (α_eff needs an isothermal sound speed; the gas is not isothermal)".into(),
+                "R, ν",
+            ),
+        };
+        format!(
+            "the steady disk's viscosity (orbits {:.1}–{:.1}, {} snapshots, Ṁ = {:.3} of the \
+             transfer rate): ν = {:.3e} a² Ω_orb{alpha} ({columns}: {bins})",
+            self.orbits.0, self.orbits.1, self.snapshots, self.accretion_share, self.nu,
+        )
+    }
+}
+
 /// The disk particles' cylindrical radii and masses of the snapshots averaged over.
 pub struct DiskSample {
     pub orbit: f64,
@@ -507,6 +536,16 @@ mod tests {
         assert_eq!(v.orbits, (100.0, 103.0));
         // Too few annuli with gas: no figure.
         assert!(steady_viscosity(&samples, mdot, 0.9, r_in, (0.29, 0.5), 10, gm, None).is_none());
+        // Without an isothermal c_s the line gives ν alone, never "NaN".
+        let v = steady_viscosity(&samples, mdot, 0.9, r_in, (0.15, 0.27), 10, gm, None).unwrap();
+        let line = v.summary_line();
+        assert!(
+            !line.contains("NaN") && line.contains("isothermal"),
+            "{line}"
+        );
+        let iso = steady_viscosity(&samples, mdot, 0.9, r_in, (0.15, 0.27), 10, gm, Some(cs));
+        let line = iso.unwrap().summary_line();
+        assert!(line.contains("α_eff = ") && !line.contains("NaN"), "{line}");
     }
 
     #[test]
