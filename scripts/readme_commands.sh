@@ -26,7 +26,7 @@ rules=(
     'superhump_scan\.sh~skip~a series of 200-orbit runs'
     'run problems/disk3d\.toml~set~--set time.end=0.04 --set output.interval=0.01'
     'run problems/cv2d_steady\.toml~set~--set time.end=62.83185307179586'
-    'run problems/overflow3d\.toml~set~--set time.end=3.1416'
+    'run problems/overflow3d(_cool)?\.toml~set~--set time.end=3.1416'
     'run problems/(oy_car|superhump|outbursts)\.toml~skip~tens of minutes (tests/cv_analyse.rs, superhump_cli.rs, outbursts.rs run the analyses on short runs)'
     'runs/hump2d~skip~18 minutes (tests/lightcurve_cli.rs runs the light curve analysis)'
     'runs/(oy_car|superhump|outbursts)~skip~needs a run of tens of minutes (above)'

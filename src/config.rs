@@ -693,13 +693,17 @@ impl Config {
                     "table `[initial_disk]`: only a cv problem (with [binary] and particles.h) starts with a disk"
                 );
             };
-            let cs_max = match self.eos {
-                Eos::Isothermal { cs } => cs,
-                Eos::LocallyIsothermal { cs0, r0, q } => {
-                    cs0 * (disk.r_in.max(1e-12) / r0)
-                        .powf(-q)
-                        .max((disk.r_out / r0).powf(-q))
-                }
+            // The largest of c_s = cs0 (R/r0)^(−q) across the disk: at one of its edges.
+            let profile_max = |cs0: f64, r0: f64, q: f64| {
+                cs0 * (disk.r_in.max(1e-12) / r0)
+                    .powf(-q)
+                    .max((disk.r_out / r0).powf(-q))
+            };
+            let cs_max = match (self.eos, self.cooling) {
+                (Eos::Isothermal { cs }, _) => cs,
+                (Eos::LocallyIsothermal { cs0, r0, q }, _) => profile_max(cs0, r0, q),
+                // An ideal gas starts at the cooling's target (problems/cv.rs).
+                (_, Some(c)) => profile_max(c.cs0, c.r0, c.q),
                 _ => self.stream.map_or(0.0, |s| s.cs),
             };
             disk.validate(b.mass_ratio(), b.accretor_radius, h, d, cs_max)

@@ -24,6 +24,7 @@ fn internal_energy_relaxes_exponentially_to_the_target() {
         cs0: 0.05,
         r0: 1.0,
         q: 0.5,
+        heats: true,
     };
     let g = PointMass {
         gm: 1.0,

@@ -7,8 +7,15 @@
 //!
 //! so that a disk keeps its temperature where nothing heats it, while shock heating (the
 //! bright spot, where the stream strikes the rim) and viscous heating show as gas hotter than
-//! u₀ for about a cooling time. The term is added to du/dt after the sweep, as the external
-//! gravity is; the energy criterion of the time step covers it.
+//! u₀ for about a cooling time. With `heats = false` the term only cools,
+//!
+//!   (du/dt)_cool = −max(0, u − u₀(R)) Ω_K(R) / β,
+//!
+//! as radiative cooling does: gas that expanded below u₀ — the stream, cooling adiabatically
+//! from L1 — keeps its lower temperature until a shock or the viscosity heats it, so a stream
+//! cooler than the disk (the donor's ~3000 K against the disk's 10⁴ K) reaches the rim cool.
+//! The term is added to du/dt after the sweep, as the external gravity is; the energy
+//! criterion of the time step covers it.
 
 use serde::{Deserialize, Serialize};
 
@@ -30,10 +37,18 @@ pub struct Cooling {
     /// Power-law index: c_s ∝ R^(−q) (default 0, an isothermal target).
     #[serde(default)]
     pub q: f64,
+    /// Whether the relaxation also heats gas cooler than u₀ (default true); false: it only
+    /// cools, as radiation does.
+    #[serde(default = "yes")]
+    pub heats: bool,
 }
 
 fn one() -> f64 {
     1.0
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Cooling {
@@ -84,7 +99,9 @@ impl Cooling {
     pub fn rate(&self, gamma: f64, g: &PointMass, u: f64, r: f64) -> f64 {
         let r = r.max(f64::MIN_POSITIVE);
         let omega = (g.gm / (r * r * r)).sqrt();
-        -(u - self.target_u(gamma, r)) * omega / self.beta
+        let excess = u - self.target_u(gamma, r);
+        let excess = if self.heats { excess } else { excess.max(0.0) };
+        -excess * omega / self.beta
     }
 
     /// Adds the cooling term to every particle's du/dt.
@@ -108,6 +125,7 @@ mod tests {
             cs0: 0.05,
             r0: 1.0,
             q: 0.5,
+            heats: true,
         };
         let g = PointMass {
             gm: 1.0,
@@ -125,6 +143,42 @@ mod tests {
         assert!(c.rate(gamma, &g, 0.5 * u0, r) > 0.0);
     }
 
+    /// Cooling only: gas hotter than u₀ cools exactly as with two-sided relaxation, gas
+    /// cooler than u₀ (the stream after its adiabatic expansion) is left alone.
+    #[test]
+    fn cooling_only_leaves_cooler_gas_alone() {
+        let both = Cooling {
+            beta: 2.0,
+            cs0: 0.05,
+            r0: 1.0,
+            q: 0.5,
+            heats: true,
+        };
+        let only = Cooling {
+            heats: false,
+            ..both
+        };
+        let g = PointMass {
+            gm: 1.0,
+            softening: 0.0,
+            accretion_radius: None,
+        };
+        let gamma = 5.0 / 3.0;
+        for r in [0.1, 0.25, 0.7] {
+            let u0 = both.target_u(gamma, r);
+            for f in [1.01, 2.0, 300.0] {
+                assert_eq!(
+                    only.rate(gamma, &g, f * u0, r),
+                    both.rate(gamma, &g, f * u0, r)
+                );
+            }
+            for f in [0.0, 0.1, 0.99, 1.0] {
+                assert!(both.rate(gamma, &g, 0.99 * u0, r) > 0.0);
+                assert_eq!(only.rate(gamma, &g, f * u0, r), 0.0);
+            }
+        }
+    }
+
     #[test]
     fn needs_an_energy_equation_and_a_central_mass() {
         let c = Cooling {
@@ -132,6 +186,7 @@ mod tests {
             cs0: 0.05,
             r0: 1.0,
             q: 0.0,
+            heats: true,
         };
         let ideal = Eos::Ideal { gamma: 1.4 };
         assert!(c.validate(&ideal, true).is_ok());

@@ -19,6 +19,7 @@ use crate::boundary::BoundaryKind;
 use crate::config::Config;
 use crate::particles::Particles;
 use crate::physics::binary::{Binary, Region};
+use crate::physics::eos::Eos;
 use crate::physics::mass_transfer::MassTransfer;
 use crate::problems::{InitialState, make_box};
 
@@ -79,19 +80,19 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let mut next_id = 0;
     if let Some(disk) = &cfg.initial_disk {
         let stream = mt.stream.expect("checked above");
-        let eos = cfg.eos;
-        let cs = move |r: f64| match eos {
-            crate::physics::eos::Eos::Ideal { .. } => stream.cs,
-            _ => eos.pressure_sound_speed(1.0, 0.0, r).1,
+        let (eos, cooling, u_stream) = (cfg.eos, cfg.cooling, mt.u_inject());
+        // An ideal gas starts at the cooling's target temperature where there is one (the
+        // disk's, which the stream need not share), else at the stream's; its scale height
+        // is that of P/ρ = (γ − 1) u.
+        let thermo = move |r: f64| match (eos, cooling) {
+            (Eos::Ideal { gamma }, Some(c)) => {
+                let u = c.target_u(gamma, r);
+                (u, ((gamma - 1.0) * u).sqrt())
+            }
+            (Eos::Ideal { gamma }, None) => (u_stream, ((gamma - 1.0) * u_stream).sqrt()),
+            _ => (0.0, eos.pressure_sound_speed(1.0, 0.0, r).1),
         };
-        let n = disk.place(
-            &mt.binary,
-            h,
-            (stream.particle_mass, mt.u_inject()),
-            cs,
-            0,
-            &mut p,
-        );
+        let n = disk.place(&mt.binary, h, stream.particle_mass, thermo, 0, &mut p);
         next_id = n as u64;
     }
     let mut st = mt.start_state(cfg.particles.seed, next_id);
@@ -434,6 +435,55 @@ pub fn kepler_ring<const D: usize>(
 mod tests {
     use super::*;
     use crate::physics::binary::BinaryParams;
+
+    /// problems/overflow3d_cool.toml: an ideal gas with cooling starts its disk at the
+    /// cooling's target u₀(R), its columns as tall as P/ρ = (γ − 1) u₀ makes them
+    /// (H = √((γ − 1) u₀)/Ω_K; the adiabatic sound speed would make them √γ taller), while
+    /// the stream's first releases carry the stream's own, cooler u.
+    #[test]
+    fn an_ideal_gas_disk_starts_at_the_cooling_target_and_the_stream_cooler() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("problems")
+            .join("overflow3d_cool.toml");
+        let cfg = Config::load(&path, &["particles.h=0.04".to_string()]).unwrap();
+        let (Eos::Ideal { gamma }, Some(c), Some(s)) = (cfg.eos, cfg.cooling, cfg.stream) else {
+            panic!("overflow3d_cool.toml: an ideal gas, [cooling] and [stream]");
+        };
+        let init = setup::<3>(&cfg).unwrap();
+        let p = &init.particles;
+        let b = Binary::new(cfg.binary.as_ref().unwrap());
+        let gm = b.accretor().gm;
+        let dx = cfg.initial_disk.unwrap().spacing(0.04);
+        let u_stream = s.cs * s.cs / (gamma * (gamma - 1.0));
+        let (mut disk, mut stream) = (0, 0);
+        // Per ring (keyed by R to 1e-6): its radius and the tallest |z|.
+        let mut rings: BTreeMap<i64, (f64, f64)> = BTreeMap::new();
+        for i in 0..p.len() {
+            let r = p.pos[0][i].hypot(p.pos[1][i]);
+            if r < 0.5 {
+                disk += 1;
+                let u0 = c.target_u(gamma, r);
+                assert!((p.u[i] - u0).abs() <= 1e-12 * u0, "u {} u0 {u0}", p.u[i]);
+                let e = rings.entry((r * 1e6).round() as i64).or_insert((r, 0.0));
+                e.1 = e.1.max(p.pos[2][i].abs());
+            } else {
+                stream += 1;
+                assert!((p.u[i] - u_stream).abs() <= 1e-12 * u_stream);
+                assert!(p.u[i] < 0.5 * c.target_u(gamma, r));
+            }
+        }
+        assert!(disk > 1000 && stream >= 1, "{disk} disk, {stream} stream");
+        // The top particle of each column sits at H Φ⁻¹((n − ½)/n), n = round(√(2π) H/Δ):
+        // exact but for the quantile's 1.2e-9 and round-off.
+        for (r, z_top) in rings.values() {
+            let hz = ((gamma - 1.0) * c.target_u(gamma, *r)).sqrt() / (gm / r.powi(3)).sqrt();
+            let n = ((2.0 * std::f64::consts::PI).sqrt() * hz / dx)
+                .round()
+                .max(1.0);
+            let want = hz * crate::problems::cv_disk::normal_quantile((n - 0.5) / n);
+            assert!((z_top - want).abs() < 1e-8 * hz, "R {r}: {z_top} vs {want}");
+        }
+    }
 
     #[test]
     fn an_eccentric_ring_reads_its_eccentricity_and_periastron() {

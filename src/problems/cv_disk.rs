@@ -98,15 +98,15 @@ impl InitialDisk {
         }
     }
 
-    /// Appends the disk to `p`: ids from `first_id`, each particle of mass and internal
-    /// energy `(mass, u)`; `cs(R)` the sound speed that sets the 3D scale height.
-    /// Returns the number placed.
+    /// Appends the disk to `p`: ids from `first_id`, each particle of mass `mass`;
+    /// `thermo(R)` gives the internal energy u at R and the isothermal sound speed √(P/ρ)
+    /// that sets the 3D scale height H = √(P/ρ)/Ω_K. Returns the number placed.
     pub fn place<const D: usize>(
         &self,
         b: &Binary,
         h: f64,
-        (mass, u): (f64, f64),
-        cs: impl Fn(f64) -> f64,
+        mass: f64,
+        thermo: impl Fn(f64) -> (f64, f64),
         first_id: u64,
         p: &mut Particles<D>,
     ) -> usize {
@@ -118,7 +118,8 @@ impl InitialDisk {
             let r = self.r_in + (k as f64 + 0.5) * dx;
             let n_phi = ((std::f64::consts::TAU * r / dx).round() as usize).max(1);
             let omega_k = (gm / (r * r * r)).sqrt();
-            let hz = cs(r) / omega_k;
+            let (u, cs) = thermo(r);
+            let hz = cs / omega_k;
             let column = if D == 3 {
                 ((2.0 * std::f64::consts::PI).sqrt() * hz / dx)
                     .round()
@@ -230,7 +231,7 @@ mod tests {
         let b = Binary::new(&BinaryParams::with_q(0.1));
         let mut p = Particles::<2>::new();
         let h = 0.01;
-        let n = disk().place(&b, h, (1e-6, 0.0), |_| 0.05, 7, &mut p);
+        let n = disk().place(&b, h, 1e-6, |_| (0.0, 0.05), 7, &mut p);
         assert_eq!(n, p.len());
         assert_eq!(p.id[0], 7);
         // Uniform number density: the count over the annulus's area per Δ² is within one
@@ -263,7 +264,7 @@ mod tests {
             r_out: 0.32,
             spacing: Some(0.002),
         };
-        d.place(&b, 0.0024, (1.0, 0.0), |_| 0.05, 0, &mut p);
+        d.place(&b, 0.0024, 1.0, |_| (0.0, 0.05), 0, &mut p);
         let n = p.len() as f64;
         let rms = (p.pos[2].iter().map(|z| z * z).sum::<f64>() / n).sqrt();
         // H = c_s/Ω_K at r ≈ 0.31 with GM₁ = 1/1.1 is 0.00905: columns of 11. The rms of
