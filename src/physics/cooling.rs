@@ -172,10 +172,11 @@ mod tests {
                     both.rate(gamma, &g, f * u0, r)
                 );
             }
-            for f in [0.0, 0.1, 0.99, 1.0] {
-                assert!(both.rate(gamma, &g, 0.99 * u0, r) > 0.0);
+            for f in [0.0, 0.1, 0.99] {
+                assert!(both.rate(gamma, &g, f * u0, r) > 0.0);
                 assert_eq!(only.rate(gamma, &g, f * u0, r), 0.0);
             }
+            assert_eq!(only.rate(gamma, &g, u0, r), 0.0);
         }
     }
 
