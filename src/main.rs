@@ -313,10 +313,12 @@ fn execute(job: Job) -> Result<Ended> {
     if let Some(ended) = execute_mpi(&job) {
         return ended;
     }
-    match job {
+    // The step loop runs on one of the pool's threads, so that each parallel loop it starts
+    // is split from inside the pool instead of handed to it from outside and waited for.
+    rayon::scope(|_| match job {
         Job::Fresh(cfg, opts) => run(&cfg, &opts),
         Job::Resume(sets, opts) => sphdisk::simulation::resume(&sets, &opts),
-    }
+    })
 }
 
 /// The job on the MPI ranks; None when there is only one rank (run as usual). A rank that
@@ -349,11 +351,14 @@ fn real_main(cli: Cli) -> Result<()> {
     if let Some(t) = cli.threads {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         sphdisk::limits::check_threads(t, cores)?;
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .context("cannot start the thread pool")?;
     }
+    // Without --threads rayon's default (RAYON_NUM_THREADS, else one per core). The step loop
+    // runs on one of these threads (`execute`), so they get the main thread's 8 MiB stack.
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(cli.threads.unwrap_or(0))
+        .stack_size(8 << 20)
+        .build_global()
+        .context("cannot start the thread pool")?;
     match cli.command {
         Command::Run {
             problem,

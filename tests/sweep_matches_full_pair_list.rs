@@ -335,19 +335,28 @@ fn full_list_window_gives_identical_results_with_more_memory() {
         Eos::Isothermal { cs: 1.0 },
         ArtificialViscosity::default(),
     );
-    let mut a = random_set::<3>(4000, false, 9);
-    let mut b = a.clone();
-    let sa = evaluate(&mut a, &bx, &phys, Window::Sweep);
-    let sb = evaluate(&mut b, &bx, &phys, Window::FullList);
-    assert_eq!(a.acc, b.acc);
-    assert_eq!(sa.pairs, sb.pairs);
-    assert_eq!(sb.peak_pairs as u64, sb.pairs);
-    assert!(
-        (sa.peak_pairs as f64) < 0.5 * sb.peak_pairs as f64,
-        "window {} vs full {}",
-        sa.peak_pairs,
-        sb.peak_pairs
-    );
+    // 40 000 particles in 16 slabs: on two threads each slab holds more than a batch of
+    // small slabs (`sweep::BATCH_PARTICLES_PER_THREAD` = 1024 per thread), so slabs enter the
+    // sweep one at a time, as in any large run.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut a = random_set::<3>(40_000, false, 9);
+        let mut b = a.clone();
+        let sa = evaluate(&mut a, &bx, &phys, Window::Sweep);
+        let sb = evaluate(&mut b, &bx, &phys, Window::FullList);
+        assert_eq!(a.acc, b.acc);
+        assert_eq!(sa.pairs, sb.pairs);
+        assert_eq!(sb.peak_pairs as u64, sb.pairs);
+        assert!(
+            (sa.peak_pairs as f64) < 0.5 * sb.peak_pairs as f64,
+            "window {} vs full {}",
+            sa.peak_pairs,
+            sb.peak_pairs
+        );
+    });
 }
 
 /// A mostly empty open box (a dense clump and a few particles far out, as a binary's disk

@@ -70,14 +70,11 @@ pub enum Surface {
 /// pole-on, π/2 in the orbital plane).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Observer {
-    q: f64,
     sin_i: f64,
     cos_i: f64,
-    /// L1's distance from the accretor, the donor's lobe's farthest point from the donor
-    /// (1 − d_L1), and the critical potential.
-    d_l1: f64,
+    /// The donor's lobe, and its farthest point from the donor (1 − d_L1).
+    lobe: roche::DonorLobe,
     lobe_reach: f64,
-    phi_l1: f64,
     /// Linear limb-darkening coefficient u of the faces and the rim (0: Lambert).
     limb_darkening: f64,
     /// G M1 in code units (1/(1 + q)), for the disk's scale height.
@@ -91,14 +88,12 @@ const RAY_SAMPLES: usize = 128;
 
 impl Observer {
     pub fn new(q: f64, inclination: f64) -> Self {
-        let d_l1 = roche::l1_distance(q);
+        let lobe = roche::DonorLobe::new(q);
         Self {
-            q,
             sin_i: inclination.sin(),
             cos_i: inclination.cos(),
-            d_l1,
-            lobe_reach: 1.0 - d_l1,
-            phi_l1: roche::l1_potential(q),
+            lobe,
+            lobe_reach: 1.0 - lobe.d_l1,
             limb_darkening: 0.0,
             gm_accretor: 1.0 / (1.0 + q),
         }
@@ -145,7 +140,7 @@ impl Observer {
         (0..=RAY_SAMPLES).any(|k| {
             let s = s0 + (s1 - s0) * k as f64 / RAY_SAMPLES as f64;
             let p = [x[0] + s * o[0], x[1] + s * o[1], x[2] + s * o[2]];
-            p[0] < -self.d_l1 && roche::potential(self.q, p) < self.phi_l1
+            self.lobe.contains(p)
         })
     }
 

@@ -86,9 +86,36 @@ pub fn l1_a(q: f64) -> f64 {
 }
 
 /// Whether `x` lies inside the donor's Roche lobe: on the donor's side of L1 and below the
-/// critical potential.
+/// critical potential. Finds L1 afresh (two bisections); a test repeated per particle uses a
+/// [`DonorLobe`], which finds it once.
 pub fn inside_donor_lobe(q: f64, x: [f64; 3]) -> bool {
-    x[0] < -l1_distance(q) && potential(q, x) < l1_potential(q)
+    DonorLobe::new(q).contains(x)
+}
+
+/// The donor's Roche lobe with L1 and the critical potential found once, for tests repeated
+/// per particle and per step (the sinks, the observer's eclipse rays).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DonorLobe {
+    q: f64,
+    /// L1's distance from the accretor.
+    pub d_l1: f64,
+    /// The Roche potential at L1.
+    pub phi_l1: f64,
+}
+
+impl DonorLobe {
+    pub fn new(q: f64) -> Self {
+        Self {
+            q,
+            d_l1: l1_distance(q),
+            phi_l1: l1_potential(q),
+        }
+    }
+
+    /// Whether `x` lies on the donor's side of L1 and below the critical potential.
+    pub fn contains(&self, x: [f64; 3]) -> bool {
+        x[0] < -self.d_l1 && potential(self.q, x) < self.phi_l1
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -416,6 +443,37 @@ mod tests {
         assert!(inside_donor_lobe(q, [-1.1, 0.0, 0.0]));
         assert!(!inside_donor_lobe(q, [-0.5, 0.0, 0.0]));
         assert!(!inside_donor_lobe(q, [-1.0, 0.8, 0.0]));
+        // The lobe with L1 found once places points as the definition does: just on either
+        // side of the critical surface along the line of centres beyond the donor
+        // (x < −1, where Φ rises outwards), and on either side of L1.
+        let lobe = DonorLobe::new(q);
+        assert_eq!(lobe.d_l1, l1_distance(q));
+        assert_eq!(lobe.phi_l1, l1_potential(q));
+        let far = bisect_far_side(q);
+        assert!(lobe.contains([far + 1e-9, 0.0, 0.0]));
+        assert!(!lobe.contains([far - 1e-9, 0.0, 0.0]));
+        assert!(lobe.contains([-lobe.d_l1 - 1e-6, 0.0, 0.0]));
+        assert!(!lobe.contains([-lobe.d_l1 + 1e-6, 0.0, 0.0]));
+        for k in 0..200 {
+            let a = k as f64 * 0.0314;
+            let x = [-1.0 + 0.3 * a.cos(), 0.3 * a.sin(), 0.05 * (3.0 * a).sin()];
+            assert_eq!(lobe.contains(x), inside_donor_lobe(q, x));
+        }
+    }
+
+    /// The lobe's far end on the line of centres: Φ(x, 0, 0) = Φ_L1 for x < −1.
+    fn bisect_far_side(q: f64) -> f64 {
+        let phi = l1_potential(q);
+        let (mut lo, mut hi) = (-2.0_f64, -1.0 - 1e-6);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if potential(q, [mid, 0.0, 0.0]) > phi {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
     }
 
     /// Eggleton's fit is good to about 1% for all mass ratios (Eggleton 1983 quotes better

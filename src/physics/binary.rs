@@ -197,6 +197,8 @@ pub struct Binary {
     pub omega: f64,
     pub accretor_radius: f64,
     pub escape_radius: f64,
+    /// The donor's lobe, L1 found once: gas inside it has returned to the donor.
+    pub donor_lobe: roche::DonorLobe,
     /// The observer of the light curve's `l_observed` (`binary.inclination`).
     pub observer: Observer,
 }
@@ -210,6 +212,7 @@ impl Binary {
             omega: 1.0,
             accretor_radius: params.accretor_radius,
             escape_radius: params.escape_radius,
+            donor_lobe: roche::DonorLobe::new(q),
             observer: Observer::new(q, params.inclination.to_radians())
                 .with_limb_darkening(params.limb_darkening),
         }
@@ -321,7 +324,7 @@ impl Binary {
         if rc2 > self.escape_radius * self.escape_radius {
             return Some(Sink::Escaped);
         }
-        if roche::inside_donor_lobe(self.q, x3) {
+        if self.donor_lobe.contains(x3) {
             return Some(Sink::Returned);
         }
         None

@@ -9,6 +9,7 @@ use crate::particles::Particles;
 use crate::physics::binary::{Binary, MSUN_G, Sink, YEAR_S};
 use crate::physics::eos::Eos;
 use crate::physics::l1_stream::{InjectorState, L1Stream};
+use rayon::prelude::*;
 
 /// A binary's sources and sinks.
 #[derive(Clone, Copy, Debug)]
@@ -71,11 +72,17 @@ impl MassTransfer {
     /// Removes every particle that reached a sink and books it; returns how many went.
     pub fn remove<const D: usize>(&self, p: &mut Particles<D>, budget: &mut MassBudget) -> usize {
         let b = &self.binary;
+        // The sinks' tests in parallel (the donor lobe's potential for every particle on the
+        // donor's side); the booking in index order, so the sums are those of a serial scan.
+        let sinks: Vec<Option<Sink>> = (0..p.len())
+            .into_par_iter()
+            .map(|i| b.sink(&p.position(i)))
+            .collect();
         let mut keep = vec![true; p.len()];
         let mut gone = 0;
-        for i in 0..p.len() {
+        for (i, sink) in sinks.into_iter().enumerate() {
+            let Some(sink) = sink else { continue };
             let x = p.position(i);
-            let Some(sink) = b.sink(&x) else { continue };
             let l = p.mass[i] * b.angular_momentum_z(&x, &p.velocity(i));
             let flow = match sink {
                 Sink::Accreted => &mut budget.accreted,

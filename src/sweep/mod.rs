@@ -359,20 +359,41 @@ pub fn sweep<const D: usize>(
     // Slabs touched but not yet finished (small: the window, plus the first slabs of a
     // periodic x axis that wait for the last).
     let mut pending: Vec<usize> = Vec::new();
-    for s in 0..=ns {
+    // Slabs enter a batch at a time: one slab, or several of few particles together, so that
+    // every thread has pairs to find and sum (`batch_end`). The blocks of a batch — and every
+    // block ready for the same sum at once — are summed in parallel and merged in slab order
+    // (`PairBlock::scatter`): the same result as one block after another.
+    let mut s = 0;
+    loop {
         if s < ns {
+            let end = batch_end(local, s);
             let c = Instant::now();
-            let block = PairBlock::find(local, &phys.kernel, s);
+            let found: Vec<PairBlock> = (s..end)
+                .into_par_iter()
+                .with_min_len(1)
+                .map(|t| PairBlock::find(local, &phys.kernel, t))
+                .collect();
             lap(&mut times.find_pairs, c);
             let c = Instant::now();
-            block.density(local, phys.pressure_energy_gamma().is_some(), &mut work);
+            let refs: Vec<&PairBlock> = found.iter().collect();
+            PairBlock::density(
+                &refs,
+                local,
+                phys.pressure_energy_gamma().is_some(),
+                &mut work,
+            );
             lap(&mut times.density, c);
-            stats.pairs += block.len() as u64;
-            live_pairs += block.len();
+            for (t, block) in (s..end).zip(found) {
+                stats.pairs += block.len() as u64;
+                live_pairs += block.len();
+                blocks[t] = Some(block);
+                pair_stage[t] = DENSITY;
+                pending.push(t);
+            }
             stats.peak_pairs = stats.peak_pairs.max(live_pairs);
-            blocks[s] = Some(block);
-            pair_stage[s] = DENSITY;
-            pending.push(s);
+            s = end;
+        } else {
+            s = ns + 1;
         }
         // Advance every block and slab as far as the dependencies allow.
         loop {
@@ -396,6 +417,9 @@ pub fn sweep<const D: usize>(
                     progress = true;
                 }
             }
+            // The blocks ready for their next sum (it depends on the slabs' stages only, which
+            // this pass does not change), by sum.
+            let (mut for_gradient, mut for_force) = (Vec::new(), Vec::new());
             for &t in &pending {
                 let next = pair_stage[t] + 1;
                 if next > FORCE {
@@ -405,23 +429,42 @@ pub fn sweep<const D: usize>(
                     && (t == 0 || slab_stage[t - 1] >= next - 1)
                     && ex.copies_ready(t, next - 1)
                     && (t == 0 || ex.copies_ready(t - 1, next - 1));
-                if !ready {
-                    continue;
+                if ready {
+                    if next == GRADIENT {
+                        for_gradient.push(t);
+                    } else {
+                        for_force.push(t);
+                    }
                 }
-                let block = blocks[t].as_ref().expect("live block");
+            }
+            if !for_gradient.is_empty() {
+                let refs: Vec<&PairBlock> = for_gradient
+                    .iter()
+                    .map(|&t| blocks[t].as_ref().expect("live block"))
+                    .collect();
                 let c = Instant::now();
-                if next == GRADIENT {
-                    block.gradient(local, &mut work);
-                    lap(&mut times.gradient, c);
-                } else {
-                    block.force(local, phys, &mut work);
-                    lap(&mut times.force, c);
+                PairBlock::gradient(&refs, local, &mut work);
+                lap(&mut times.gradient, c);
+                for &t in &for_gradient {
+                    pair_stage[t] = GRADIENT;
+                }
+                progress = true;
+            }
+            if !for_force.is_empty() {
+                let refs: Vec<&PairBlock> = for_force
+                    .iter()
+                    .map(|&t| blocks[t].as_ref().expect("live block"))
+                    .collect();
+                let c = Instant::now();
+                PairBlock::force(&refs, local, phys, &mut work);
+                lap(&mut times.force, c);
+                for &t in &for_force {
+                    pair_stage[t] = FORCE;
                     if window == Window::Sweep {
-                        live_pairs -= block.len();
+                        live_pairs -= blocks[t].as_ref().map_or(0, PairBlock::len);
                         blocks[t] = None;
                     }
                 }
-                pair_stage[t] = next;
                 progress = true;
             }
             let mut st = SweepState {
@@ -436,7 +479,7 @@ pub fn sweep<const D: usize>(
             pending.retain(|&t| slab_stage[t] < FORCE || pair_stage[t] < FORCE);
             if !progress {
                 // Nothing local left to do: wait for other ranks, or go on to the next slab.
-                if s == ns && !pending.is_empty() {
+                if s > ns && !pending.is_empty() {
                     let c = Instant::now();
                     ex.wait(&mut st);
                     lap(&mut times.wait, c);
@@ -444,6 +487,9 @@ pub fn sweep<const D: usize>(
                 }
                 break;
             }
+        }
+        if s > ns {
+            break;
         }
     }
     assert!(
@@ -453,6 +499,29 @@ pub fn sweep<const D: usize>(
     stats.peak_window_bytes = stats.peak_pairs * BYTES_PER_PAIR;
     stats.times = times;
     (work, stats)
+}
+
+/// Slabs enter the sweep together until they hold this many particles per thread: a slab
+/// holding more enters alone, so the window of a large run stays the paper's (a few slabs'
+/// pairs); slabs of few particles — a CV disk of a few thousand, most slabs nearly empty —
+/// enter several at a time, so that every thread has pairs to find and sum.
+pub const BATCH_PARTICLES_PER_THREAD: usize = 1024;
+
+/// The end of the batch of slabs entering the sweep from slab `s`, on this pool's threads.
+fn batch_end<const D: usize>(local: &Local<D>, s: usize) -> usize {
+    let want = BATCH_PARTICLES_PER_THREAD * rayon::current_num_threads().max(1);
+    batch_of(|t| local.slab_range(t).len(), local.num_slabs(), s, want)
+}
+
+/// The end of the batch from slab `s` of `ns` slabs holding `len(t)` particles each: slabs
+/// are added until they hold `want` particles (at least one slab).
+fn batch_of(len: impl Fn(usize) -> usize, ns: usize, s: usize, want: usize) -> usize {
+    let (mut end, mut count) = (s, 0);
+    while end < ns && (end == s || count < want) {
+        count += len(end);
+        end += 1;
+    }
+    end
 }
 
 /// A slab has finished stage `stage` for all its particles: fold the periodic ghosts' part
@@ -685,4 +754,28 @@ pub fn all_pairs<const D: usize>(local: &Local<D>, kernel: &Kernel<D>) -> Vec<(u
                 .collect::<Vec<_>>()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Small slabs enter together until they hold the batch's particles; a slab holding as
+    /// many alone enters alone; the last batch ends at the last slab.
+    #[test]
+    fn small_slabs_enter_together_and_large_ones_alone() {
+        let sizes = [100, 100, 3000, 50, 50, 50, 600, 700];
+        let len = |t: usize| sizes[t];
+        let ns = sizes.len();
+        let mut ends = Vec::new();
+        let mut s = 0;
+        while s < ns {
+            s = batch_of(len, ns, s, 512);
+            ends.push(s);
+        }
+        // 100 + 100 < 512 takes the 3000 too; 50 × 3 < 512 takes the 600; 700 alone.
+        assert_eq!(ends, [3, 7, 8]);
+        assert_eq!(batch_of(len, ns, 2, 512), 3);
+        assert_eq!(batch_of(len, ns, 7, 1), 8);
+    }
 }

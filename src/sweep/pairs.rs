@@ -336,53 +336,71 @@ impl PairBlock {
         out
     }
 
-    /// Runs `f` on every pair, each task adding the two partners' contributions into its own
-    /// buffer over the block's particles (no write conflicts, streaming access), then merges
-    /// the buffers into `work` with `merge`.
-    fn scatter<const D: usize, A, F, M>(&self, work: &mut [Work<D>], f: F, merge: M)
+    /// Runs `f` on every pair of every block in `blocks`, each task adding the two partners'
+    /// contributions into its own buffer over its block's particles (no write conflicts,
+    /// streaming access), then merges the buffers into `work` with `merge`, block after block
+    /// in the order given. The blocks' pairs are summed in parallel — several small blocks
+    /// at once, or a large one's runs of groups —, the merges in a fixed order, so that the
+    /// result does not depend on how many blocks went together.
+    fn scatter<const D: usize, A, F, M>(blocks: &[&PairBlock], work: &mut [Work<D>], f: F, merge: M)
     where
         A: Accumulator,
         F: Fn(&Pair) -> (A, A) + Sync,
         M: Fn(&mut Work<D>, &A) + Sync,
     {
-        let n = self.i_end - self.j_start;
-        if self.is_empty() {
-            return;
-        }
         let tasks = rayon::current_num_threads().max(1);
-        let chunk = self.len.div_ceil(tasks).max(4096);
-        let run = |groups: &[Vec<Pair>]| {
-            let mut buf = vec![A::zero(); n];
-            for g in groups {
-                for p in g {
-                    let (ci, cj) = f(p);
-                    buf[p.i as usize - self.j_start].add(&ci);
-                    buf[p.j as usize - self.j_start].add(&cj);
-                }
+        let partial = |b: &PairBlock| -> Vec<Vec<A>> {
+            if b.is_empty() {
+                return Vec::new();
             }
-            buf
-        };
-        let runs = self.runs(chunk);
-        let bufs: Vec<Vec<A>> = if runs.len() == 1 {
-            vec![run(runs[0])]
-        } else {
-            runs.into_par_iter().map(run).collect()
-        };
-        work[self.j_start..self.i_end]
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(1024)
-            .for_each(|(o, wk)| {
-                for b in &bufs {
-                    merge(wk, &b[o]);
+            let n = b.i_end - b.j_start;
+            let chunk = b.len.div_ceil(tasks).max(4096);
+            let run = |groups: &[Vec<Pair>]| {
+                let mut buf = vec![A::zero(); n];
+                for g in groups {
+                    for p in g {
+                        let (ci, cj) = f(p);
+                        buf[p.i as usize - b.j_start].add(&ci);
+                        buf[p.j as usize - b.j_start].add(&cj);
+                    }
                 }
-            });
+                buf
+            };
+            let runs = b.runs(chunk);
+            if runs.len() == 1 {
+                vec![run(runs[0])]
+            } else {
+                runs.into_par_iter().map(run).collect()
+            }
+        };
+        let partials: Vec<Vec<Vec<A>>> = match blocks {
+            [b] => vec![partial(b)],
+            _ => blocks
+                .par_iter()
+                .with_min_len(1)
+                .map(|b| partial(b))
+                .collect(),
+        };
+        for (b, bufs) in blocks.iter().zip(&partials) {
+            if bufs.is_empty() {
+                continue;
+            }
+            work[b.j_start..b.i_end]
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(1024)
+                .for_each(|(o, wk)| {
+                    for buf in bufs {
+                        merge(wk, &buf[o]);
+                    }
+                });
+        }
     }
 
-    /// First sum, Eq. (5): ρ_k += Σ m W over this block's pairs; with `pressure_energy`
+    /// First sum, Eq. (5): ρ_k += Σ m W over these blocks' pairs; with `pressure_energy`
     /// also Σ m u W (`physics::pressure_energy`).
     pub fn density<const D: usize>(
-        &self,
+        blocks: &[&PairBlock],
         local: &Local<D>,
         pressure_energy: bool,
         work: &mut [Work<D>],
@@ -390,7 +408,8 @@ impl PairBlock {
         let m = &local.mass;
         if pressure_energy {
             let u = &local.u;
-            self.scatter(
+            Self::scatter(
+                blocks,
                 work,
                 |p| {
                     let (i, j) = (p.i as usize, p.j as usize);
@@ -416,7 +435,8 @@ impl PairBlock {
             );
             return;
         }
-        self.scatter(
+        Self::scatter(
+            blocks,
             work,
             |p| ((m[p.j as usize] * p.w, 1u32), (m[p.i as usize] * p.w, 1u32)),
             |wk, a: &(f64, u32)| {
@@ -427,8 +447,9 @@ impl PairBlock {
     }
 
     /// Second sum, Eq. (10): the velocity gradient, needing every partner's density.
-    pub fn gradient<const D: usize>(&self, local: &Local<D>, work: &mut [Work<D>]) {
-        self.scatter(
+    pub fn gradient<const D: usize>(blocks: &[&PairBlock], local: &Local<D>, work: &mut [Work<D>]) {
+        Self::scatter(
+            blocks,
             work,
             |p| {
                 let (i, j) = (p.i as usize, p.j as usize);
@@ -445,18 +466,23 @@ impl PairBlock {
     }
 
     /// Third sum: accelerations (Eq. 7 + viscosity) and du/dt.
-    pub fn force<const D: usize>(&self, local: &Local<D>, phys: &Physics<D>, work: &mut [Work<D>]) {
+    pub fn force<const D: usize>(
+        blocks: &[&PairBlock],
+        local: &Local<D>,
+        phys: &Physics<D>,
+        work: &mut [Work<D>],
+    ) {
         if phys.pair_terms().viscous {
-            self.force_with::<D, true>(local, phys, work);
+            Self::force_with::<D, true>(blocks, local, phys, work);
         } else {
-            self.force_with::<D, false>(local, phys, work);
+            Self::force_with::<D, false>(blocks, local, phys, work);
         }
     }
 
     /// The force sum compiled with and without the physical viscosity: without it no
     /// partner's stress is loaded and the viscous terms are not there to branch over.
     fn force_with<const D: usize, const VISCOUS: bool>(
-        &self,
+        blocks: &[&PairBlock],
         local: &Local<D>,
         phys: &Physics<D>,
         work: &mut [Work<D>],
@@ -499,7 +525,8 @@ impl PairBlock {
         let side = |k: usize| side::<D, VISCOUS>(local, k, reads);
         let av = &phys.av;
         let m = &local.mass;
-        self.scatter(
+        Self::scatter(
+            blocks,
             work,
             |p| {
                 let (i, j) = (p.i as usize, p.j as usize);
