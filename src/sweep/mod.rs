@@ -9,6 +9,11 @@
 //! are folded into their owners first. With a periodic x axis the first slabs wait for the
 //! last one (the sweep is a ring), which the dependency rules below handle without a special
 //! case.
+//!
+//! Slabs of few particles (a CV disk of a few thousand in a box mostly empty) enter a batch at
+//! a time ([`BATCH_PARTICLES_PER_THREAD`]): their pairs are found in parallel, and the blocks
+//! ready for the same sum are summed together and merged in slab order — the result of one
+//! slab at a time, bit for bit, without leaving all threads but one idle.
 
 pub mod cost;
 pub mod local;
