@@ -88,3 +88,29 @@ fn internal_energy_relaxes_exponentially_to_the_target() {
     assert!(p.u[0] < 0.2 * u_start[0]);
     assert!(p.u[2] > 0.5 * u_start[2]);
 }
+
+/// `problems/overflow3d_cool.toml` measures a stream cooler than its disk: its header's
+/// figures (stream/H 0.79, 6.8% passing the rim) are those of a stream leaving L1 at
+/// T_stream/T_disk = (stream.cs / cooling.cs0)² = (0.06 / 0.2324)² = 0.067. The file must
+/// run that stream (it once held stream.cs = 0.1273, T ratio 0.3, whose 58% passes); 10% on
+/// the ratio separates the header's 0.067 from every other stream the header lists (0.02,
+/// 0.09, 0.12, …).
+#[test]
+fn the_cool_overflow_file_runs_the_stream_its_header_measures() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/overflow3d_cool.toml");
+    let cfg = sphdisk::config::Config::load(&path, &[]).unwrap();
+    let stream = cfg.stream.expect("a stream");
+    let cooling = cfg.cooling.expect("cooling");
+    assert!(!cooling.heats, "the cooling only cools");
+    let ratio = (stream.cs / cooling.cs0).powi(2);
+    assert!(
+        (ratio / 0.067 - 1.0).abs() < 0.1,
+        "T_stream/T_disk = {ratio}"
+    );
+    let header = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        header.contains("stream.cs = 0.06: T_stream/T_disk"),
+        "the header names it"
+    );
+}
