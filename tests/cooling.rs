@@ -90,7 +90,7 @@ fn internal_energy_relaxes_exponentially_to_the_target() {
 }
 
 /// `problems/overflow3d_cool.toml` measures a stream cooler than its disk: its header's
-/// figures (stream/H 0.79, 6.8% passing the rim) are those of a stream leaving L1 at
+/// figures (stream/H 0.75, 6.8% passing the rim) are those of a stream leaving L1 at
 /// T_stream/T_disk = (stream.cs / cooling.cs0)² = (0.06 / 0.2324)² = 0.067. The file must
 /// run that stream (it once held stream.cs = 0.1273, T ratio 0.3, whose 58% passes); 10% on
 /// the ratio separates the header's 0.067 from every other stream the header lists (0.02,

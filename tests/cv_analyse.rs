@@ -80,6 +80,7 @@ fn a_short_cv_run_gives_its_disk_and_bright_spot() {
     assert!((0.0..=1.0).contains(&f), "{p:#}");
     assert!(p["arrived_particles"].as_u64().unwrap() > 0, "{p:#}");
     assert!(p["over_under_fraction"].is_null(), "{p:#}");
+    assert!(p["stream_to_rim_height"].is_null(), "{p:#}");
     assert!(
         json["passage_notes"]
             .as_array()
@@ -156,6 +157,14 @@ fn a_short_overflow_run_gives_the_streams_passage_through_the_rim() {
     assert!(passed > 0.0 && passed <= 1.0, "{p:#}");
     assert!(over >= 0.0 && through >= 0.0, "{p:#}");
     assert!(over + through <= passed + 1e-12, "{p:#}");
+    // The stream's height as it comes to the rim, against the rim's (3D only).
+    let (stream, rim) = (num("stream_height"), num("rim_height"));
+    assert!(stream > 0.0 && rim > 0.0, "{p:#}");
+    assert!(
+        (num("stream_to_rim_height") - stream / rim).abs() < 1e-12,
+        "{p:#}"
+    );
+    assert!(stdout.contains("of its height"), "{stdout}");
     let (r, r90) = (num("reimpact_radius"), num("reimpact_radius_over_r90"));
     assert!(
         r > 0.1 && r90 < 0.75,

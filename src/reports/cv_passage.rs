@@ -32,6 +32,13 @@
 //! A particle caught by no snapshot between its passage and its accretion is missed: the
 //! flight from the rim to the re-impact takes ~0.1 orbit, so a run meant for this writes a
 //! snapshot every [`MAX_INTERVAL_ORBITS`] orbit or more often (a note says when it does not).
+//!
+//! What sets the share (paper, Section 4: "the ratio of the heights of the stream and the
+//! rim of the disk are unknown") is measured beside it, 3D only: the stream's height as it
+//! comes to the rim, the mass-weighted rms z of the stream gas (released during the run, on
+//! a stream orbit) at [`APPROACH`] R90, over the rim's, the rms z of disk gas at `RIM` R90,
+//! each pooled over the snapshots of the run's second half (the rim settled, the stream's
+//! head long gone).
 
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
@@ -56,6 +63,10 @@ pub const H_BIN: f64 = 0.1;
 /// A particle passes within this time of its arrival or not at all (module doc), so the
 /// share does not depend on how long the run goes on after the arrivals.
 pub const SETTLE_ORBITS: f64 = 0.25;
+
+/// The annulus, in R90, where the stream's height on its way to the rim is taken: outside
+/// the rim annulus `RIM`, inside the stream's first crossing of 1.5 R90 (module doc).
+pub const APPROACH: (f64, f64) = (1.1, 1.4);
 
 /// Longer snapshot intervals (orbits) can miss gas that passes and is accreted or
 /// circularised between two snapshots; the figures then carry a note.
@@ -110,7 +121,22 @@ pub struct PassageFigures {
     pub reimpact_azimuth_deg: Option<f64>,
     /// Share of the passed mass seen re-impacting.
     pub reimpacted_share: f64,
+    /// 3D: the stream's rms height at [`APPROACH`] R90 and the rim's at `RIM` R90 (a), and
+    /// their ratio, over the snapshots of the run's second half (module doc); None in 2D or
+    /// where those snapshots held no such gas.
+    pub stream_height: Option<f64>,
+    pub rim_height: Option<f64>,
+    pub stream_to_rim_height: Option<f64>,
     pub windows: Vec<PassageWindow>,
+}
+
+/// One snapshot's sums for the heights: Σ m z² and Σ m of the approaching stream, and of
+/// the disk's rim.
+#[derive(Clone, Copy, Debug, Default)]
+struct HeightSums {
+    time: f64,
+    stream: (f64, f64),
+    rim: (f64, f64),
 }
 
 /// Follows the run's stream particles through its snapshots ([`PassageTracker::feed`] each,
@@ -123,6 +149,7 @@ pub struct PassageTracker {
     tracks: BTreeMap<u64, Track>,
     times: Vec<f64>,
     three_d: bool,
+    heights: Vec<HeightSums>,
 }
 
 impl PassageTracker {
@@ -143,6 +170,9 @@ impl PassageTracker {
             return;
         };
         let heights = disk_heights(s, disk, r90);
+        if s.dimension == 3 {
+            self.heights.push(height_sums(s, disk, r90, first));
+        }
         for i in (0..s.len()).filter(|&i| s.id[i] >= first) {
             let x = [s.pos[0][i], s.pos[1][i], s.pos[2][i]];
             let r = x[0].hypot(x[1]);
@@ -258,6 +288,8 @@ impl PassageTracker {
             .collect();
         let re_mass = re.iter().fold(0.0, |acc, (m, _)| acc + m);
         let az: Vec<(f64, f64)> = re.iter().map(|&(m, r)| (r.2, m)).collect();
+        let (stream_height, rim_height) =
+            pooled_heights(&self.heights, 0.5 * (self.times[0] + t_last));
         Some(PassageFigures {
             snapshot_interval_orbits: interval,
             orbits: (o0, o1),
@@ -282,6 +314,9 @@ impl PassageTracker {
             } else {
                 0.0
             },
+            stream_height,
+            rim_height,
+            stream_to_rim_height: stream_height.zip(rim_height).map(|(s, r)| s / r),
             windows,
         })
     }
@@ -305,6 +340,41 @@ fn disk_heights(s: &Snapshot, disk: &[bool], r90: f64) -> Vec<Option<f64>> {
         .collect()
 }
 
+/// This snapshot's [`HeightSums`]: stream gas (id ≥ `first`, not on a disk orbit) at
+/// [`APPROACH`] R90, disk gas at `RIM` R90.
+fn height_sums(s: &Snapshot, disk: &[bool], r90: f64, first: u64) -> HeightSums {
+    let mut h = HeightSums {
+        time: s.time,
+        ..HeightSums::default()
+    };
+    for i in 0..s.len() {
+        let r = s.pos[0][i].hypot(s.pos[1][i]) / r90;
+        let mz2 = s.mass[i] * s.pos[2][i].powi(2);
+        let sums = if disk[i] && (RIM.0..=RIM.1).contains(&r) {
+            &mut h.rim
+        } else if !disk[i] && s.id[i] >= first && (APPROACH.0..=APPROACH.1).contains(&r) {
+            &mut h.stream
+        } else {
+            continue;
+        };
+        sums.0 += mz2;
+        sums.1 += s.mass[i];
+    }
+    h
+}
+
+/// The stream's and the rim's rms heights pooled over the snapshots from `since` on (None
+/// where those snapshots held no such gas).
+fn pooled_heights(sums: &[HeightSums], since: f64) -> (Option<f64>, Option<f64>) {
+    let (mut stream, mut rim) = ((0.0, 0.0), (0.0, 0.0));
+    for h in sums.iter().filter(|h| h.time >= since) {
+        stream = (stream.0 + h.stream.0, stream.1 + h.stream.1);
+        rim = (rim.0 + h.rim.0, rim.1 + h.rim.1);
+    }
+    let rms = |(mz2, m): (f64, f64)| (m > 0.0).then(|| (mz2 / m).sqrt());
+    (rms(stream), rms(rim))
+}
+
 /// `cv_passage.csv`: a row per orbit of arrival.
 pub fn windows_csv(windows: &[PassageWindow]) -> String {
     let mut s =
@@ -324,7 +394,7 @@ impl PassageFigures {
         let pct =
             |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{:.1}%", 100.0 * v.abs()));
         format!(
-            "the stream's passage through the rim (arrivals over orbits {:.2}–{:.2}, {} particles, snapshots ≤ {:.3} orbit apart): {:.1}%{} passes the rim instead of stopping there — over or under the disk {}, through it {}; re-impact at R = {} a ({} R90), azimuth {}° ({:.0}% of the passed gas seen re-impacting)",
+            "the stream's passage through the rim (arrivals over orbits {:.2}–{:.2}, {} particles, snapshots ≤ {:.3} orbit apart): {:.1}%{} passes the rim instead of stopping there — over or under the disk {}, through it {}; re-impact at R = {} a ({} R90), azimuth {}° ({:.0}% of the passed gas seen re-impacting){}",
             self.orbits.0,
             self.orbits.1,
             self.arrived_particles,
@@ -340,7 +410,16 @@ impl PassageFigures {
                 .map_or("–".into(), |v| format!("{v:.2}")),
             self.reimpact_azimuth_deg
                 .map_or("–".into(), |v| format!("{v:.0}")),
-            100.0 * self.reimpacted_share
+            100.0 * self.reimpacted_share,
+            match (self.stream_height, self.rim_height) {
+                (Some(st), Some(rim)) => format!(
+                    "; the stream comes to the rim at {:.2} of its height (rms z {st:.4} a at {}–{} R90 against the rim's {rim:.4} a, the run's second half)",
+                    st / rim,
+                    APPROACH.0,
+                    APPROACH.1
+                ),
+                _ => String::new(),
+            }
         )
     }
 }
@@ -404,20 +483,36 @@ mod tests {
         parts
     }
 
+    /// q = 0.1, its disk ([`disk`]) and the first id a stream particle gets.
+    fn setup() -> (Binary, Vec<Part>, u64) {
+        let b = Binary::new(&BinaryParams::with_q(0.1));
+        let base = disk(&b);
+        let first = base.len() as u64;
+        (b, base, first)
+    }
+
+    /// The tracker fed with snapshots of the stages (orbit, particles) in order, R90 = 0.5:
+    /// its figures and notes.
+    fn track(b: &Binary, stages: &[(f64, Vec<Part>)]) -> (Option<PassageFigures>, Vec<String>) {
+        let mut t = PassageTracker::new();
+        for (orbit, parts) in stages {
+            let s = snapshot(b, *orbit, parts);
+            t.feed(&s, &disk_mask(b, &s), Some(0.5));
+        }
+        let mut notes = Vec::new();
+        (t.finish(&mut notes), notes)
+    }
+
     /// Ten stream particles pass the rim (four over the disk, four under it, two through
     /// its midplane) and re-impact at R = 0.275 a, azimuth 30°; ten stop at the rim and
     /// drift inward slowly; a disk particle that was there from the start moves far inward
     /// and is not counted. The tracker finds the halves, the routes and the re-impact.
     #[test]
     fn the_tracker_tells_gas_passing_the_rim_from_gas_stopping_there() {
-        let b = Binary::new(&BinaryParams::with_q(0.1));
-        let base = disk(&b);
-        let first = base.len() as u64;
-        let mut snaps = vec![snapshot(&b, 0.0, &base)];
+        let (b, base, first) = setup();
         // Orbit 0.05: twenty stream particles beyond the rim (R = 0.6 > 1.1 R90).
         let mut p1 = base.clone();
         p1.extend((0..20).map(|k| infalling(first + k, 0.6, 200.0, 0.0)));
-        snaps.push(snapshot(&b, 0.05, &p1));
         // Orbit 0.10: passers inside 0.75 R90, stoppers circular at the rim; an old disk
         // particle thrown inward.
         let mut p2 = base.clone();
@@ -427,19 +522,13 @@ mod tests {
             p2.push(infalling(first + k, 0.325, 150.0, z));
         }
         p2.extend((10..20).map(|k| circular(&b, first + k, 0.48, 190.0, 0.0)));
-        snaps.push(snapshot(&b, 0.10, &p2));
         // Orbit 0.40: passers circular at 0.275 a, 30°; stoppers 0.01 a further in.
         let mut p3 = base.clone();
         p3.extend((0..10).map(|k| circular(&b, first + k, 0.275, 30.0, 0.0)));
         p3.extend((10..20).map(|k| circular(&b, first + k, 0.47, 190.0, 0.0)));
-        snaps.push(snapshot(&b, 0.40, &p3));
-
-        let mut t = PassageTracker::new();
-        for s in &snaps {
-            t.feed(s, &disk_mask(&b, s), Some(0.5));
-        }
-        let mut notes = Vec::new();
-        let f = t.finish(&mut notes).expect("twenty arrivals");
+        let stages = [(0.0, base), (0.05, p1), (0.10, p2), (0.40, p3)];
+        let (f, notes) = track(&b, &stages);
+        let f = f.expect("twenty arrivals");
         assert_eq!(f.arrived_particles, 20);
         // Exact: the figures are ratios of equal masses.
         assert!((f.passed_fraction - 0.5).abs() < 1e-12, "{f:?}");
@@ -449,6 +538,9 @@ mod tests {
         assert!((f.reimpact_radius_over_r90.unwrap() - 0.55).abs() < 1e-12);
         assert!((f.reimpact_azimuth_deg.unwrap() - 30.0).abs() < 1e-9);
         assert_eq!(f.reimpacted_share, 1.0);
+        // The stream was at 1.1–1.4 R90 only at orbit 0.05, in the run's first half.
+        assert_eq!((f.stream_height, f.stream_to_rim_height), (None, None));
+        assert!(f.rim_height.is_some());
         // Snapshots 0.3 orbit apart are too coarse for the figures to be trusted blindly.
         assert!(
             notes.iter().any(|n| n.contains("0.300 orbit apart")),
@@ -467,9 +559,7 @@ mod tests {
     /// 0.48 a, and at orbit 1.05 are inside 0.75 R90; ten more pass at once (orbit 0.1).
     #[test]
     fn gas_that_stopped_does_not_pass_later() {
-        let b = Binary::new(&BinaryParams::with_q(0.1));
-        let base = disk(&b);
-        let first = base.len() as u64;
+        let (b, base, first) = setup();
         let with = |stoppers: &dyn Fn(u64) -> Part, passers: &dyn Fn(u64) -> Part| {
             let mut p = base.clone();
             p.extend((0..10).map(|k| stoppers(first + k)));
@@ -487,12 +577,7 @@ mod tests {
             (1.0, with(&|id| infalling(id, 0.48, 190.0, 0.0), &passed)),
             (1.05, with(&|id| circular(&b, id, 0.3, 150.0, 0.0), &passed)),
         ];
-        let mut t = PassageTracker::new();
-        for (orbit, parts) in &stages {
-            let s = snapshot(&b, *orbit, parts);
-            t.feed(&s, &disk_mask(&b, &s), Some(0.5));
-        }
-        let f = t.finish(&mut Vec::new()).expect("twenty arrivals");
+        let f = track(&b, &stages).0.expect("twenty arrivals");
         assert_eq!(f.arrived_particles, 20);
         // Exact: ratios of equal masses.
         assert!((f.passed_fraction - 0.5).abs() < 1e-12, "{f:?}");
@@ -504,22 +589,19 @@ mod tests {
     /// the round-off of the snapshot times at the windows' edges.
     #[test]
     fn arrival_windows_hold_whole_orbits_of_snapshots() {
-        let b = Binary::new(&BinaryParams::with_q(0.1));
-        let base = disk(&b);
-        let first = base.len() as u64;
+        let (b, base, first) = setup();
         for last in [3.0, 6.0] {
-            let mut t = PassageTracker::new();
             let mut parts = base.clone();
             let n = (last / 0.05f64).round() as u64;
-            for k in 0..=n {
-                let orbit = k as f64 * 0.05;
-                if k > 0 {
-                    parts.push(circular(&b, first + k, 0.48, 190.0, 0.0));
-                }
-                let s = snapshot(&b, orbit, &parts);
-                t.feed(&s, &disk_mask(&b, &s), Some(0.5));
-            }
-            let f = t.finish(&mut Vec::new()).expect("arrivals");
+            let stages: Vec<(f64, Vec<Part>)> = (0..=n)
+                .map(|k| {
+                    if k > 0 {
+                        parts.push(circular(&b, first + k, 0.48, 190.0, 0.0));
+                    }
+                    (k as f64 * 0.05, parts.clone())
+                })
+                .collect();
+            let f = track(&b, &stages).0.expect("arrivals");
             let counts: Vec<usize> = f.windows.iter().map(|w| w.arrived_particles).collect();
             assert_eq!(counts.iter().sum::<usize>(), f.arrived_particles);
             assert!(counts[1..].iter().all(|&c| c == 20), "{last}: {counts:?}");
@@ -531,21 +613,15 @@ mod tests {
     /// empty float sum gives (written "-0.0" to cv.json and "-0.0%" to the summary).
     #[test]
     fn a_stream_stopping_at_the_rim_passes_a_positive_zero() {
-        let b = Binary::new(&BinaryParams::with_q(0.1));
-        let base = disk(&b);
-        let first = base.len() as u64;
+        let (b, base, first) = setup();
         let mut p1 = base.clone();
         p1.extend((0..10).map(|k| infalling(first + k, 0.6, 200.0, 0.0)));
         let mut p2 = base.clone();
         p2.extend((0..10).map(|k| circular(&b, first + k, 0.48, 190.0, 0.0)));
         let mut p3 = base.clone();
         p3.extend((0..10).map(|k| circular(&b, first + k, 0.47, 190.0, 0.0)));
-        let mut t = PassageTracker::new();
-        for (orbit, parts) in [(0.0, &base), (0.05, &p1), (0.1, &p2), (0.4, &p3)] {
-            let s = snapshot(&b, orbit, parts);
-            t.feed(&s, &disk_mask(&b, &s), Some(0.5));
-        }
-        let f = t.finish(&mut Vec::new()).expect("ten arrivals");
+        let stages = [(0.0, base), (0.05, p1), (0.1, p2), (0.4, p3)];
+        let f = track(&b, &stages).0.expect("ten arrivals");
         assert_eq!(f.arrived_particles, 10);
         for share in [
             f.passed_fraction,
@@ -561,22 +637,61 @@ mod tests {
         );
     }
 
+    /// The stream's height at its approach against the rim's: the rms z of stream gas at
+    /// 1.1–1.4 R90, pooled over the run's second half, over the rms z of the disk's gas at
+    /// 0.9–1.1 R90. Stream gas in the first half, beyond 1.4 R90, on a disk orbit, or from
+    /// the first snapshot is left out.
+    #[test]
+    fn the_stream_is_measured_against_the_rim_as_it_approaches() {
+        let (b, base, first) = setup();
+        // Four particles arrive (and are gone by orbit 0.25), so there are figures.
+        let mut p1 = base.clone();
+        p1.extend((0..4).map(|k| infalling(first + k, 0.6, 200.0, 0.0)));
+        // First half (orbit 0.05 < 0.2): a thick stream at 1.25 R90, not counted.
+        p1.extend((4..8).map(|k| infalling(first + k, 0.625, 200.0, 0.05)));
+        let mut p2 = base.clone();
+        p2.extend((0..4).map(|k| circular(&b, first + k, 0.48, 190.0, 0.0)));
+        // Second half: the stream at ±z at 1.25 R90, and gas that must be left out.
+        let second = |z: f64| {
+            let mut p = base.clone();
+            p.extend((0..4).map(|k| {
+                let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                infalling(first + 10 + k, 0.625, 200.0, sign * z)
+            }));
+            p.push(infalling(first + 20, 0.8, 200.0, 0.3)); // 1.6 R90
+            p.push(circular(&b, first + 21, 0.6, 200.0, 0.03)); // a disk orbit
+            p
+        };
+        let stages = [
+            (0.0, base.clone()),
+            (0.05, p1),
+            (0.1, p2),
+            (0.25, second(0.01)),
+            (0.4, second(0.02)),
+        ];
+        let f = track(&b, &stages).0.expect("four arrivals");
+        // Exact, from the positions: equal masses, z² of 1e-4 and 4e-4 four times each; the
+        // rim ring (R = 0.475) has columns at z = 0, ±0.02.
+        let stream = (0.5f64 * (1e-4 + 4e-4)).sqrt();
+        let rim = (0.0008f64 / 3.0).sqrt();
+        assert!((f.stream_height.unwrap() - stream).abs() < 1e-15, "{f:?}");
+        assert!((f.rim_height.unwrap() - rim).abs() < 1e-15, "{f:?}");
+        assert!((f.stream_to_rim_height.unwrap() - stream / rim).abs() < 1e-12);
+        assert!(
+            f.summary_line()
+                .contains(&format!("{:.2} of its height", stream / rim))
+        );
+    }
+
     /// Gas that has not yet had SETTLE_ORBITS to pass is not counted, and a run whose
     /// stream never reaches a disk gives no figures but a note.
     #[test]
     fn late_arrivals_are_not_counted_and_no_arrival_gives_a_note() {
-        let b = Binary::new(&BinaryParams::with_q(0.1));
-        let base = disk(&b);
-        let first = base.len() as u64;
+        let (b, base, first) = setup();
         let mut p1 = base.clone();
         p1.push(circular(&b, first, 0.48, 190.0, 0.0));
-        let snaps = [snapshot(&b, 0.0, &base), snapshot(&b, 0.1, &p1)];
-        let mut t = PassageTracker::new();
-        for s in &snaps {
-            t.feed(s, &disk_mask(&b, s), Some(0.5));
-        }
-        let mut notes = Vec::new();
-        assert_eq!(t.finish(&mut notes), None);
+        let (f, notes) = track(&b, &[(0.0, base), (0.1, p1)]);
+        assert_eq!(f, None);
         assert!(
             notes[0].contains("no stream gas reached the rim"),
             "{notes:?}"
