@@ -85,13 +85,6 @@ pub fn l1_a(q: f64) -> f64 {
     (1.0 - m) / d.powi(3) + m / (1.0 - d).powi(3)
 }
 
-/// Whether `x` lies inside the donor's Roche lobe: on the donor's side of L1 and below the
-/// critical potential. Finds L1 afresh (two bisections); a test repeated per particle uses a
-/// [`DonorLobe`], which finds it once.
-pub fn inside_donor_lobe(q: f64, x: [f64; 3]) -> bool {
-    DonorLobe::new(q).contains(x)
-}
-
 /// The donor's Roche lobe with L1 and the critical potential found once, for tests repeated
 /// per particle and per step (the sinks, the observer's eclipse rays).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -440,13 +433,13 @@ mod tests {
     #[test]
     fn donor_lobe_membership() {
         let q = 0.2;
-        assert!(inside_donor_lobe(q, [-1.1, 0.0, 0.0]));
-        assert!(!inside_donor_lobe(q, [-0.5, 0.0, 0.0]));
-        assert!(!inside_donor_lobe(q, [-1.0, 0.8, 0.0]));
+        let lobe = DonorLobe::new(q);
+        assert!(lobe.contains([-1.1, 0.0, 0.0]));
+        assert!(!lobe.contains([-0.5, 0.0, 0.0]));
+        assert!(!lobe.contains([-1.0, 0.8, 0.0]));
         // The lobe with L1 found once places points as the definition does: just on either
         // side of the critical surface along the line of centres beyond the donor
         // (x < −1, where Φ rises outwards), and on either side of L1.
-        let lobe = DonorLobe::new(q);
         assert_eq!(lobe.d_l1, l1_distance(q));
         assert_eq!(lobe.phi_l1, l1_potential(q));
         let far = bisect_far_side(q);
@@ -454,11 +447,28 @@ mod tests {
         assert!(!lobe.contains([far - 1e-9, 0.0, 0.0]));
         assert!(lobe.contains([-lobe.d_l1 - 1e-6, 0.0, 0.0]));
         assert!(!lobe.contains([-lobe.d_l1 + 1e-6, 0.0, 0.0]));
+        // Points 0.25 a from the donor (its lobe's volume radius is 0.252 a), inside and
+        // outside: inside exactly where the critical surface, bisected along the ray from
+        // the donor through the point (as the lobe's volume is measured), lies beyond them.
+        let (mut inside, mut outside) = (0, 0);
         for k in 0..200 {
             let a = k as f64 * 0.0314;
-            let x = [-1.0 + 0.3 * a.cos(), 0.3 * a.sin(), 0.05 * (3.0 * a).sin()];
-            assert_eq!(lobe.contains(x), inside_donor_lobe(q, x));
+            let d = [0.25 * a.cos(), 0.25 * a.sin(), 0.05 * (3.0 * a).sin()];
+            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let n = [d[0] / r, d[1] / r, d[2] / r];
+            let edge = ray_to_critical_surface(q, DONOR, n, 1.0 - lobe.d_l1, lobe.phi_l1);
+            let x = [DONOR[0] + d[0], d[1], d[2]];
+            assert_eq!(lobe.contains(x), r < edge, "{x:?}: edge at {edge}");
+            if r < edge {
+                inside += 1;
+            } else {
+                outside += 1;
+            }
         }
+        assert!(
+            inside > 20 && outside > 20,
+            "{inside} inside, {outside} outside"
+        );
     }
 
     /// The lobe's far end on the line of centres: Φ(x, 0, 0) = Φ_L1 for x < −1.
