@@ -210,17 +210,21 @@ impl ArtificialViscosity {
         scale: f64,
     ) -> (f64, f64) {
         let w = if r > 0.0 { vdotr / r } else { 0.0 };
-        let approach = w.min(0.0);
+        // A comparison rather than `f64::min` (the same for every w, NaN included: both
+        // give 0) and Π computed for every pair, then selected: pairs approach at random,
+        // and a branch on it is mispredicted about every other pair.
+        let approach = if w < 0.0 { w } else { 0.0 };
         let vsig = ci + cj - self.beta.max(1.0) * approach;
-        if approach < 0.0 && self.alpha > 0.0 {
-            let vsig_av = ci + cj - self.beta * approach;
-            (
-                -self.alpha * vsig_av * approach / (rhoi + rhoj) * scale,
-                vsig,
-            )
-        } else {
-            (0.0, vsig)
-        }
+        let vsig_av = ci + cj - self.beta * approach;
+        let pi = -self.alpha * vsig_av * approach / (rhoi + rhoj) * scale;
+        (
+            if approach < 0.0 && self.alpha > 0.0 {
+                pi
+            } else {
+                0.0
+            },
+            vsig,
+        )
     }
 }
 

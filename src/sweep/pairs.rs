@@ -30,8 +30,9 @@ pub const BYTES_PER_PAIR: usize = std::mem::size_of::<Pair>();
 const GRAIN: usize = 64;
 
 thread_local! {
-    /// Each thread's list of the pairs of the group it is searching.
-    static SCRATCH: std::cell::Cell<Vec<Pair>> = const { std::cell::Cell::new(Vec::new()) };
+    /// The capacity each thread gives a group's list: room for the largest group it has
+    /// found so far, with a quarter to spare.
+    static GROUP_CAPACITY: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
 /// The pairs of x-slab `slab`, in the order of their first partner, kept in the groups the
@@ -226,7 +227,13 @@ impl<const D: usize> Accumulator for ForceSum<D> {
         }
         self.du += o.du;
         self.diss += o.diss;
-        self.vsig = self.vsig.max(o.vsig);
+        // One `maxsd` (`f64::max` adds a test for NaN; a NaN o.vsig is skipped by both,
+        // and self.vsig, from 0, is never NaN).
+        self.vsig = if o.vsig > self.vsig {
+            o.vsig
+        } else {
+            self.vsig
+        };
     }
 }
 
@@ -252,8 +259,7 @@ impl PairBlock {
             .step_by(GRAIN)
             .map(|g0| {
                 let g1 = (g0 + GRAIN).min(i_end);
-                let mut pairs = SCRATCH.take();
-                pairs.clear();
+                let mut pairs = Vec::with_capacity(GROUP_CAPACITY.get());
                 let mut cells = StencilCells::new(local, &stencil);
                 for i in g0..g1 {
                     let c = local.cell[i];
@@ -286,11 +292,11 @@ impl PairBlock {
                         }
                     }
                 }
-                // Stored at its exact size; the thread's scratch list is kept for its next
-                // group (no growth by reallocation in the window).
-                let group = pairs.to_vec();
-                SCRATCH.set(pairs);
-                group
+                // Stored at its exact size: the allocator shrinks the block where it lies,
+                // so no pair is copied (a list that outgrew its capacity was, once).
+                GROUP_CAPACITY.set(GROUP_CAPACITY.get().max(pairs.len() + pairs.len() / 4));
+                pairs.shrink_to_fit();
+                pairs
             })
             .collect();
 
@@ -342,10 +348,22 @@ impl PairBlock {
     /// in the order given. The blocks' pairs are summed in parallel — several small blocks
     /// at once, or a large one's runs of groups —, the merges in a fixed order, so that the
     /// result does not depend on how many blocks went together.
-    fn scatter<const D: usize, A, F, M>(blocks: &[&PairBlock], work: &mut [Work<D>], f: F, merge: M)
-    where
+    ///
+    /// A particle's pairs as first partner are consecutive: what `prep` reads of it is read
+    /// once for all of them, and its own terms are added up in `acc` and stored once. Its
+    /// buffer entry is still zero when they are (its pairs as second partner come later,
+    /// from larger first partners), so the sum is the same to the bit as adding each term
+    /// into the buffer.
+    fn scatter<const D: usize, S, A, P, F, M>(
+        blocks: &[&PairBlock],
+        work: &mut [Work<D>],
+        prep: P,
+        f: F,
+        merge: M,
+    ) where
         A: Accumulator,
-        F: Fn(&Pair) -> (A, A) + Sync,
+        P: Fn(usize) -> S + Sync,
+        F: Fn(&S, &Pair) -> (A, A) + Sync,
         M: Fn(&mut Work<D>, &A) + Sync,
     {
         let tasks = rayon::current_num_threads().max(1);
@@ -358,10 +376,16 @@ impl PairBlock {
             let run = |groups: &[Vec<Pair>]| {
                 let mut buf = vec![A::zero(); n];
                 for g in groups {
-                    for p in g {
-                        let (ci, cj) = f(p);
-                        buf[p.i as usize - b.j_start].add(&ci);
-                        buf[p.j as usize - b.j_start].add(&cj);
+                    for ps in g.chunk_by(|a, b| a.i == b.i) {
+                        let i = ps[0].i as usize;
+                        let si = prep(i);
+                        let mut acc = A::zero();
+                        for p in ps {
+                            let (ci, cj) = f(&si, p);
+                            acc.add(&ci);
+                            buf[p.j as usize - b.j_start].add(&cj);
+                        }
+                        buf[i - b.j_start].add(&acc);
                     }
                 }
                 buf
@@ -411,9 +435,10 @@ impl PairBlock {
             Self::scatter(
                 blocks,
                 work,
-                |p| {
-                    let (i, j) = (p.i as usize, p.j as usize);
-                    let (mwi, mwj) = (m[i] * p.w, m[j] * p.w);
+                |i| (m[i], u[i]),
+                |&(m_i, u_i), p| {
+                    let j = p.j as usize;
+                    let (mwi, mwj) = (m_i * p.w, m[j] * p.w);
                     (
                         DensitySum {
                             rho: mwj,
@@ -422,7 +447,7 @@ impl PairBlock {
                         },
                         DensitySum {
                             rho: mwi,
-                            mu_w: mwi * u[i],
+                            mu_w: mwi * u_i,
                             n: 1,
                         },
                     )
@@ -438,7 +463,8 @@ impl PairBlock {
         Self::scatter(
             blocks,
             work,
-            |p| ((m[p.j as usize] * p.w, 1u32), (m[p.i as usize] * p.w, 1u32)),
+            |i| m[i],
+            |&m_i, p| ((m[p.j as usize] * p.w, 1u32), (m_i * p.w, 1u32)),
             |wk, a: &(f64, u32)| {
                 wk.rho += a.0;
                 wk.interactions += a.1;
@@ -451,11 +477,15 @@ impl PairBlock {
         Self::scatter(
             blocks,
             work,
-            |p| {
-                let (i, j) = (p.i as usize, p.j as usize);
-                let dx: [f64; D] = std::array::from_fn(|d| local.pos[d][i] - local.pos[d][j]);
-                let g = gradient_pair(&dx, p.f, &local.velocity(i), &local.velocity(j));
-                let (si, sj) = (local.mass[j] / local.rho[j], local.mass[i] / local.rho[i]);
+            |i| {
+                let x: [f64; D] = std::array::from_fn(|d| local.pos[d][i]);
+                (x, local.velocity(i), local.mass[i] / local.rho[i])
+            },
+            |(xi, vi, sj), p| {
+                let j = p.j as usize;
+                let dx: [f64; D] = std::array::from_fn(|d| xi[d] - local.pos[d][j]);
+                let g = gradient_pair(&dx, p.f, vi, &local.velocity(j));
+                let (si, sj) = (local.mass[j] / local.rho[j], *sj);
                 let scale = |s: f64| -> [[f64; D]; D] {
                     std::array::from_fn(|a| std::array::from_fn(|b| s * g[a][b]))
                 };
@@ -528,11 +558,15 @@ impl PairBlock {
         Self::scatter(
             blocks,
             work,
-            |p| {
-                let (i, j) = (p.i as usize, p.j as usize);
-                let dx: [f64; D] = std::array::from_fn(|d| local.pos[d][i] - local.pos[d][j]);
-                let pf = force_pair(&dx, p.r, p.f, &side(i), &side(j), av, terms);
-                let (mi, mj) = (m[i], m[j]);
+            |i| {
+                let x: [f64; D] = std::array::from_fn(|d| local.pos[d][i]);
+                (x, side(i), m[i])
+            },
+            |(xi, side_i, mi), p| {
+                let j = p.j as usize;
+                let dx: [f64; D] = std::array::from_fn(|d| xi[d] - local.pos[d][j]);
+                let pf = force_pair(&dx, p.r, p.f, side_i, &side(j), av, terms);
+                let (mi, mj) = (*mi, m[j]);
                 (
                     ForceSum {
                         acc: std::array::from_fn(|d| mj * pf.accel[d]),
