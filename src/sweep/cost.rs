@@ -10,14 +10,16 @@
 //! pairs lie within q < 1 of the cubic spline (uniform particles within the support 2h).
 //!
 //! **Bytes:** what the pair loop loads or stores, wherever it comes from (registers aside):
-//! the [`Pair`] record; each partner's fields the sum reads; the two accumulators it
-//! updates (read and written: 2 × their size per side). Pair finding: per occupied stencil
-//! cell and particle, the cell's range and box and the test of the box against the
-//! particle's reach; per candidate tested, its position and pair class; per pair found, the
-//! record stored, then copied once into the block (read and write). Sizes are taken from
-//! the types themselves, so the counts follow any change of them. Not counted: per-particle
-//! work (zeroing and merging the per-task buffers, the finishing of slabs), and the growth
-//! of the per-task pair vectors.
+//! the [`Pair`] record; the second partner's fields the sum reads and its accumulator (read
+//! and written: 2 × its size). The first partner's fields are read, and its terms stored,
+//! once for all its pairs (they are consecutive; about 25 per particle here), so they count
+//! with the per-particle work. Pair finding: per occupied stencil cell and particle, the
+//! cell's range and box and the test of the box against the particle's reach; per candidate
+//! tested, its position and pair class; per pair found, the record stored (a group's list
+//! is shrunk where it lies, not copied). Sizes are taken from the types themselves, so the
+//! counts follow any change of them. Not counted: per-particle work (the first partner's
+//! fields and accumulator, zeroing and merging the per-task buffers, the finishing of
+//! slabs), and the growth of the per-thread pair vectors.
 
 use std::mem::size_of;
 
@@ -129,7 +131,7 @@ fn velocity<const D: usize>() -> usize {
 
 /// Pair finding, per pair found: the box tests of `cells_per_pair` stencil cells, the
 /// distance tests of `candidates_per_pair` candidates, √r², the cubic spline's W and F, the
-/// record stored and copied into the block.
+/// record stored.
 pub fn find<const D: usize>(candidates_per_pair: f64, cells_per_pair: f64) -> PairCost {
     // Per axis: lo − x, x − hi, their max, the max with 0, e², added to d² (6).
     let cell_flops = 6.0 * D as f64;
@@ -143,7 +145,7 @@ pub fn find<const D: usize>(candidates_per_pair: f64, cells_per_pair: f64) -> Pa
     let shape = inner * 9.0 + (1.0 - inner) * 7.0;
     // √r², q = r/unit, the two normalisations.
     let pair_flops = 4.0 + shape;
-    let pair_bytes = 3 * size_of::<Pair>();
+    let pair_bytes = size_of::<Pair>();
     PairCost {
         flops: cells_per_pair * cell_flops + candidates_per_pair * candidate_flops + pair_flops,
         bytes: cells_per_pair * cell_bytes as f64
@@ -153,18 +155,18 @@ pub fn find<const D: usize>(candidates_per_pair: f64, cells_per_pair: f64) -> Pa
 }
 
 /// Density, Eq. (5): m_j W and m_i W, added with a count to each partner; with the
-/// pressure–energy formulation also m u W (u of both read, two products, two sums more).
+/// pressure–energy formulation also m u W (u of both, two products, two sums more).
 pub fn density<const D: usize>(s: &Setting) -> PairCost {
-    let mass = 2 * field::<D, _>(|l| &l.mass);
+    let mass = field::<D, _>(|l| &l.mass);
     if s.pressure_energy {
-        let u = 2 * field::<D, _>(|l| &l.u);
-        let acc = 2 * 2 * size_of::<DensitySum>();
+        let u = field::<D, _>(|l| &l.u);
+        let acc = 2 * size_of::<DensitySum>();
         return PairCost {
             flops: 8.0,
             bytes: (size_of::<Pair>() + mass + u + acc) as f64,
         };
     }
-    let acc = 2 * 2 * size_of::<(f64, u32)>();
+    let acc = 2 * size_of::<(f64, u32)>();
     PairCost {
         flops: 4.0,
         bytes: (size_of::<Pair>() + mass + acc) as f64,
@@ -174,15 +176,15 @@ pub fn density<const D: usize>(s: &Setting) -> PairCost {
 /// Velocity gradient, Eq. (10).
 pub fn gradient<const D: usize>() -> PairCost {
     let d = D as f64;
-    // dx (D), v_j − v_i (D), (v_j − v_i) f (D), × dx (D²), m/ρ for both (2 ÷), scaled for
-    // both (2D²), added to both (2D²).
-    let flops = 3.0 * d + 5.0 * d * d + 2.0;
+    // dx (D), v_j − v_i (D), (v_j − v_i) f (D), × dx (D²), m_j/ρ_j (1 ÷; the first
+    // partner's once per particle), scaled for both (2D²), added to both (2D²).
+    let flops = 3.0 * d + 5.0 * d * d + 1.0;
     let side =
         position::<D>() + velocity::<D>() + field::<D, _>(|l| &l.mass) + field::<D, _>(|l| &l.rho);
-    let acc = 2 * 2 * size_of::<[[f64; D]; D]>();
+    let acc = 2 * size_of::<[[f64; D]; D]>();
     PairCost {
         flops,
-        bytes: (size_of::<Pair>() + 2 * side + acc) as f64,
+        bytes: (size_of::<Pair>() + side + acc) as f64,
     }
 }
 
@@ -213,9 +215,10 @@ pub fn force<const D: usize>(s: &Setting) -> PairCost {
         flops += 13.0;
     }
     if s.pressure_energy {
-        // y = (γ − 1) u of both (2). Its pressure part, u_i u_j (1), the two weights (2 ÷),
-        // their sum (1), f v·r (1), both works (2), costs what Eq. (7)'s (7) does.
-        flops += 2.0;
+        // y = (γ − 1) u_j (1; the first partner's once per particle). Its pressure part,
+        // u_i u_j (1), the two weights (2 ÷), their sum (1), f v·r (1), both works (2), costs
+        // what Eq. (7)'s (7) does.
+        flops += 1.0;
     }
     if s.viscous {
         // g = f dx (D), 1/ρ both (2), v_ij (D); per (a, b): (S_j/ρ_i + S_i/ρ_j) g_b summed (5),
@@ -223,10 +226,10 @@ pub fn force<const D: usize>(s: &Setting) -> PairCost {
         flops += 3.0 * d + 6.0 + 11.0 * d * d;
         side += field::<D, _>(|l| &l.stress);
     }
-    let acc = 2 * 2 * size_of::<ForceSum<D>>();
+    let acc = 2 * size_of::<ForceSum<D>>();
     PairCost {
         flops,
-        bytes: (size_of::<Pair>() + 2 * side + acc) as f64,
+        bytes: (size_of::<Pair>() + side + acc) as f64,
     }
 }
 
@@ -257,61 +260,52 @@ mod tests {
         assert_eq!(size_of::<ForceSum<3>>(), 6 * f);
         assert_eq!(size_of::<(f64, u32)>(), 16);
 
-        // Density: the record, m_i and m_j, (ρ, count) read and written for both.
+        // Density: the record, m_j, (ρ, count) of j read and written (i's once per particle).
         let hydro = Setting::default();
-        assert_eq!(density::<3>(&hydro).bytes, (32 + 2 * f + 2 * 2 * 16) as f64);
-        assert_eq!(density::<3>(&hydro).bytes, 112.0);
-        // Pressure–energy: u of both too, (ρ, Σ m u W, count) read and written for both.
+        assert_eq!(density::<3>(&hydro).bytes, (32 + f + 2 * 16) as f64);
+        assert_eq!(density::<3>(&hydro).bytes, 72.0);
+        // Pressure–energy: u_j too, (ρ, Σ m u W, count) of j read and written.
         let pe = Setting {
             pressure_energy: true,
             ..hydro
         };
         assert_eq!(size_of::<DensitySum>(), 24);
-        assert_eq!(density::<3>(&pe).bytes, (32 + 4 * f + 2 * 2 * 24) as f64);
+        assert_eq!(density::<3>(&pe).bytes, (32 + 2 * f + 2 * 24) as f64);
         assert_eq!(density::<3>(&pe).flops, 8.0);
-        // Its force sum reads u of both and forms y = (γ − 1) u of each.
-        assert_eq!(force::<3>(&pe).bytes - force::<3>(&hydro).bytes, 16.0);
-        assert_eq!(force::<3>(&pe).flops - force::<3>(&hydro).flops, 2.0);
+        // Its force sum reads u_j and forms y = (γ − 1) u_j.
+        assert_eq!(force::<3>(&pe).bytes - force::<3>(&hydro).bytes, 8.0);
+        assert_eq!(force::<3>(&pe).flops - force::<3>(&hydro).flops, 1.0);
         // With the conductivity as well, u is read once.
         let both = Setting {
             conductivity: true,
             ..pe
         };
-        assert_eq!(force::<3>(&both).bytes - force::<3>(&hydro).bytes, 16.0);
-        // Gradient: x, v, m, ρ of both; the 3×3 gradient read and written for both.
-        assert_eq!(
-            gradient::<3>().bytes,
-            (32 + 2 * 8 * f + 2 * 2 * 9 * f) as f64
-        );
-        assert_eq!(gradient::<3>().bytes, 448.0);
-        assert_eq!(gradient::<3>().flops, 56.0);
-        // Force, the bench's hydro: x, v, m, ρ, p, c_s, α factor of both; a, du, diss, v_sig.
-        assert_eq!(
-            force::<3>(&hydro).bytes,
-            (32 + 2 * 11 * f + 2 * 2 * 6 * f) as f64
-        );
-        assert_eq!(force::<3>(&hydro).bytes, 400.0);
+        assert_eq!(force::<3>(&both).bytes - force::<3>(&hydro).bytes, 8.0);
+        // Gradient: x, v, m, ρ of j; j's 3×3 gradient read and written.
+        assert_eq!(gradient::<3>().bytes, (32 + 8 * f + 2 * 9 * f) as f64);
+        assert_eq!(gradient::<3>().bytes, 240.0);
+        assert_eq!(gradient::<3>().flops, 55.0);
+        // Force, the bench's hydro: x, v, m, ρ, p, c_s, α factor of j; j's a, du, diss, v_sig.
+        assert_eq!(force::<3>(&hydro).bytes, (32 + 11 * f + 2 * 6 * f) as f64);
+        assert_eq!(force::<3>(&hydro).bytes, 216.0);
         assert_eq!(force::<3>(&hydro).flops, 70.5);
-        // disk3d: plus v_av (3) and the stress (9) of both.
+        // disk3d: plus v_av (3) and the stress (9) of j.
         let disk = Setting {
             viscous: true,
             orbital: true,
             ..hydro
         };
-        assert_eq!(
-            force::<3>(&disk).bytes,
-            (32 + 2 * 23 * f + 2 * 2 * 6 * f) as f64
-        );
-        assert_eq!(force::<3>(&disk).bytes, 592.0);
+        assert_eq!(force::<3>(&disk).bytes, (32 + 23 * f + 2 * 6 * f) as f64);
+        assert_eq!(force::<3>(&disk).bytes, 312.0);
         assert_eq!(force::<3>(&disk).flops, 184.5);
         let cond = Setting {
             conductivity: true,
             ..hydro
         };
-        assert_eq!(force::<3>(&cond).bytes - force::<3>(&hydro).bytes, 16.0);
-        // Pair finding: x and the class byte per candidate; the record stored, read, written;
+        assert_eq!(force::<3>(&cond).bytes - force::<3>(&hydro).bytes, 8.0);
+        // Pair finding: x and the class byte per candidate; the record stored;
         // per stencil cell its range (two indices) and box (two corners), 18 flops in 3D.
-        assert_eq!(find::<3>(0.0, 0.0).bytes, (3 * 32) as f64);
+        assert_eq!(find::<3>(0.0, 0.0).bytes, 32.0);
         assert_eq!(
             find::<3>(1.0, 0.0).bytes - find::<3>(0.0, 0.0).bytes,
             (3 * f + 1) as f64
