@@ -81,6 +81,9 @@ struct StencilCells<'a, const D: usize> {
     stencil: &'a [[isize; D]],
     /// Cell key the ranges belong to.
     cell: u64,
+    /// Start of that cell's own particles (looked up once per cell: with the sparse index
+    /// a lookup is a binary search).
+    own_start: usize,
     /// Particle range and box (lower, upper corner) of each occupied stencil cell.
     ranges: Vec<StencilCell<D>>,
     /// Rounding allowance on the boxes' corners (relative 1e-9 of the grid's extent, far
@@ -96,6 +99,7 @@ impl<'a, const D: usize> StencilCells<'a, D> {
         Self {
             stencil,
             cell: u64::MAX,
+            own_start: 0,
             ranges,
             margin: std::array::from_fn(|d| 1e-9 * (g.lo[d].abs() + g.n[d] as f64 * g.cell[d])),
         }
@@ -108,6 +112,7 @@ impl<'a, const D: usize> StencilCells<'a, D> {
             return;
         }
         self.cell = c;
+        self.own_start = local.cells.range(c).0;
         self.ranges.clear();
         let g = &local.grid;
         let ci = cell_coords(g.n, c);
@@ -267,7 +272,7 @@ impl PairBlock {
                     let xi: [f64; D] = std::array::from_fn(|d| pos[d][i]);
                     let ci = local.class[i];
                     // The particle's own cell below it, then the stencil cells in reach.
-                    let own = (local.cells.range(c).0, i);
+                    let own = (cells.own_start, i);
                     for (a, b) in std::iter::once(own).chain(cells.near(xi, support2)) {
                         let len = b - a;
                         let xs: [&[f64]; D] = std::array::from_fn(|d| &pos[d][a..b]);
@@ -615,7 +620,7 @@ pub fn candidates<const D: usize>(local: &Local<D>, support: f64) -> Tested {
         let c = local.cell[i];
         cells.set_cell(local, c);
         let x = local.position(i);
-        total.candidates += (i - local.cells.range(c).0) as u64;
+        total.candidates += (i - cells.own_start) as u64;
         total.cells += cells.ranges.len() as u64;
         for (a, b) in cells.near(x, support * support) {
             total.candidates += (b - a) as u64;
