@@ -507,16 +507,20 @@ impl PairBlock {
         phys: &Physics<D>,
         work: &mut [Work<D>],
     ) {
-        if phys.pair_terms().viscous {
-            Self::force_with::<D, true>(blocks, local, phys, work);
-        } else {
-            Self::force_with::<D, false>(blocks, local, phys, work);
+        let orbital = !local.v_av.is_empty();
+        match (phys.pair_terms().viscous, orbital) {
+            (true, true) => Self::force_with::<D, true, true>(blocks, local, phys, work),
+            (true, false) => Self::force_with::<D, true, false>(blocks, local, phys, work),
+            (false, true) => Self::force_with::<D, false, true>(blocks, local, phys, work),
+            (false, false) => Self::force_with::<D, false, false>(blocks, local, phys, work),
         }
     }
 
-    /// The force sum compiled with and without the physical viscosity: without it no
-    /// partner's stress is loaded and the viscous terms are not there to branch over.
-    fn force_with<const D: usize, const VISCOUS: bool>(
+    /// The force sum compiled with and without the physical viscosity (without it no
+    /// partner's stress is loaded and the viscous terms are not there to branch over) and
+    /// with and without orbital velocities for the AV (without them v_av is v, and the
+    /// compiler computes v_ij·r_ij once for both).
+    fn force_with<const D: usize, const VISCOUS: bool, const ORBITAL: bool>(
         blocks: &[&PairBlock],
         local: &Local<D>,
         phys: &Physics<D>,
@@ -530,19 +534,18 @@ impl PairBlock {
         // load fewer per partner.
         let y_factor = phys.pressure_energy_gamma().map_or(0.0, |g| g - 1.0);
         let need_u = phys.av.conductivity > 0.0 || terms.pressure_energy;
-        let orbital_av = !local.v_av.is_empty();
         /// What the force sum reads of partner `k`: only the fields the terms use.
         #[inline(always)]
-        fn side<const D: usize, const VISCOUS: bool>(
+        fn side<const D: usize, const VISCOUS: bool, const ORBITAL: bool>(
             local: &Local<D>,
             k: usize,
-            (orbital_av, need_u, pressure_energy, y_factor): (bool, bool, bool, f64),
+            (need_u, pressure_energy, y_factor): (bool, bool, f64),
         ) -> ForceSide<D> {
             let v = local.velocity(k);
             let u = if need_u { local.u[k] } else { 0.0 };
             ForceSide {
                 v,
-                v_av: if orbital_av { local.v_av[k] } else { v },
+                v_av: if ORBITAL { local.v_av[k] } else { v },
                 rho: local.rho[k],
                 p: local.p[k],
                 cs: local.cs[k],
@@ -556,8 +559,8 @@ impl PairBlock {
                 y: if pressure_energy { y_factor * u } else { 0.0 },
             }
         }
-        let reads = (orbital_av, need_u, terms.pressure_energy, y_factor);
-        let side = |k: usize| side::<D, VISCOUS>(local, k, reads);
+        let reads = (need_u, terms.pressure_energy, y_factor);
+        let side = |k: usize| side::<D, VISCOUS, ORBITAL>(local, k, reads);
         let av = &phys.av;
         let m = &local.mass;
         Self::scatter(
