@@ -56,10 +56,11 @@ fn bench_writes_a_consistent_csv_of_thread_scaling() {
         let step = f("seconds_per_step");
         assert!((parts - step).abs() <= 1e-5 * step, "{parts} vs {step}");
         assert!(f("pairs_per_second_per_core") * f("threads") <= f("pairs_per_second") * 1.000001);
-        // Bytes moved per pair (sphdisk::sweep::cost): the three sums' fixed 960 B, and pair
-        // finding's 96 B per pair plus 25 B per candidate tested and 64 B per stencil-cell
+        // Bytes moved per pair (sphdisk::sweep::cost): the three sums' fixed 528 B (72 + 240
+        // + 216: the record, the second partner's fields and accumulator), and pair
+        // finding's 32 B per pair plus 25 B per candidate tested and 64 B per stencil-cell
         // box tested.
-        let bytes = 1056.0 + 25.0 * f("candidates_per_pair") + 64.0 * f("cells_per_pair");
+        let bytes = 560.0 + 25.0 * f("candidates_per_pair") + 64.0 * f("cells_per_pair");
         assert!((f("bytes_per_pair") - bytes).abs() < 0.01, "{row}");
         assert!(
             f("flops_per_pair") > 0.0
