@@ -154,28 +154,67 @@ impl<const D: usize> Grid<D> {
 
     /// Counting sort of particles by cell: returns `(order, cell_start)` where `order[k]` is
     /// the source index of the k-th particle in cell order and the particles of cell `c` are
-    /// `order[cell_start[c]..cell_start[c + 1]]`. Stable: equal cells keep source order.
+    /// `order[cell_start[c]..cell_start[c + 1]]`. Stable: equal cells keep source order. In
+    /// parallel: the cells are counted by blocks of particles, and the cells are then cut
+    /// into one range per thread of about equal particle count, each thread placing its
+    /// range's particles (the result does not depend on the threads).
     pub fn sort(&self, pos: &[Vec<f64>; D]) -> (Vec<u32>, Vec<u32>) {
         let n = pos[0].len();
+        let nc = self.num_cells();
         let keys: Vec<u32> = (0..n)
             .into_par_iter()
             .with_min_len(4096)
             .map(|i| self.index(self.coords(std::array::from_fn(|d| pos[d][i]))) as u32)
             .collect();
-        let mut start = vec![0u32; self.num_cells() + 1];
-        for &k in &keys {
-            start[k as usize + 1] += 1;
+        let tasks = rayon::current_num_threads().max(1);
+        let counts = keys
+            .par_chunks(n.div_ceil(tasks).max(1 << 14))
+            .map(|ks| {
+                let mut c = vec![0u32; nc];
+                for &k in ks {
+                    c[k as usize] += 1;
+                }
+                c
+            })
+            .reduce_with(|mut a, b| {
+                for (x, y) in a.iter_mut().zip(&b) {
+                    *x += y;
+                }
+                a
+            })
+            .unwrap_or_else(|| vec![0; nc]);
+        let mut start = vec![0u32; nc + 1];
+        for c in 0..nc {
+            start[c + 1] = start[c] + counts[c];
         }
-        for c in 0..self.num_cells() {
-            start[c + 1] += start[c];
-        }
-        let mut next = start.clone();
+        // Cell ranges of about n / tasks particles each, and their parts of `order`.
         let mut order = vec![0u32; n];
-        for (i, &k) in keys.iter().enumerate() {
-            let slot = &mut next[k as usize];
-            order[*slot as usize] = i as u32;
-            *slot += 1;
+        let mut pieces = Vec::with_capacity(tasks);
+        let (mut rest, mut c0) = (order.as_mut_slice(), 0);
+        for t in 1..=tasks {
+            let c1 = if t == tasks {
+                nc
+            } else {
+                start
+                    .partition_point(|&s| (s as usize) < t * n / tasks)
+                    .min(nc)
+            };
+            let c1 = c1.max(c0);
+            let (part, tail) = rest.split_at_mut((start[c1] - start[c0]) as usize);
+            pieces.push((c0, c1, part));
+            (rest, c0) = (tail, c1);
         }
+        pieces.into_par_iter().for_each(|(c0, c1, part)| {
+            let mut next: Vec<u32> = start[c0..c1].iter().map(|&s| s - start[c0]).collect();
+            for (i, &k) in keys.iter().enumerate() {
+                let k = k as usize;
+                if (c0..c1).contains(&k) {
+                    let slot = &mut next[k - c0];
+                    part[*slot as usize] = i as u32;
+                    *slot += 1;
+                }
+            }
+        });
         (order, start)
     }
 }
@@ -247,6 +286,50 @@ impl CellIndex {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The parallel counting sort gives the stable order of a plain sort by cell key, and
+    /// the same cell starts, on 1, 2, 3 and 7 threads (its pieces split by thread count):
+    /// 20 000 particles, clumped so that cells hold from none to hundreds.
+    #[test]
+    fn counting_sort_is_stable_on_any_thread_count() {
+        let bx = SimBox {
+            min: [0.0; 3],
+            max: [1.0; 3],
+            kinds: [BoundaryKind::Periodic; 3],
+        };
+        let mut rng = crate::rng::Rng::new(11);
+        let mut pos: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::new());
+        for i in 0..20_000 {
+            for d in 0..3 {
+                let x = if i % 3 == 0 {
+                    rng.uniform()
+                } else {
+                    (0.3 + 0.05 * rng.normal()).clamp(0.0, 0.999)
+                };
+                pos[d].push(x);
+            }
+        }
+        let g = Grid::new(&bx, 0.04, &pos);
+        let key = |i: usize| g.index(g.coords(std::array::from_fn(|d| pos[d][i])));
+        let mut expected: Vec<u32> = (0..20_000).collect();
+        expected.sort_by_key(|&i| key(i as usize));
+        let mut expected_start = vec![0u32; g.num_cells() + 1];
+        for &i in &expected {
+            expected_start[key(i as usize) + 1] += 1;
+        }
+        for c in 0..g.num_cells() {
+            expected_start[c + 1] += expected_start[c];
+        }
+        for threads in [1, 2, 3, 7] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (order, start) = pool.install(|| g.sort(&pos));
+            assert_eq!(order, expected, "{threads} threads");
+            assert_eq!(start, expected_start, "{threads} threads");
+        }
+    }
 
     /// The sparse index finds the same particles in every cell and slab as the dense one,
     /// and holds only the occupied cells.

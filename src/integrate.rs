@@ -258,7 +258,11 @@ pub fn kdk_step_with<const D: usize>(
                         (pr, sound_speed(gamma, pr, rho[i]))
                     }
                     None => {
-                        let radius = cylindrical_radius::<D>(&std::array::from_fn(|d| pos[d][i]));
+                        let radius = if phys.eos.needs_radius() {
+                            cylindrical_radius::<D>(&std::array::from_fn(|d| pos[d][i]))
+                        } else {
+                            0.0
+                        };
                         phys.eos.pressure_sound_speed(rho[i], u[i], radius)
                     }
                 };

@@ -49,8 +49,8 @@ const MAX_KEPT: usize = 16;
 /// Below this a vector comes from the heaps, which reuse its memory anyway.
 const KEEP_BYTES: usize = 32 << 20;
 
-/// `len` copies of `value`, in a kept vector of the same type if there is one (filled in
-/// parallel), else freshly allocated.
+/// `len` copies of `value`, in a kept vector of the same type if there is one, else freshly
+/// allocated; filled in parallel either way.
 pub fn filled_vec<T: Copy + Send + Sync + 'static>(len: usize, value: T) -> Vec<T> {
     use rayon::prelude::*;
     let kept = {
@@ -68,7 +68,11 @@ pub fn filled_vec<T: Copy + Send + Sync + 'static>(len: usize, value: T) -> Vec<
             v.resize(len, value);
             *v
         }
-        None => vec![value; len],
+        None => (0..len)
+            .into_par_iter()
+            .with_min_len(1 << 14)
+            .map(|_| value)
+            .collect(),
     }
 }
 

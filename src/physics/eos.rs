@@ -49,6 +49,12 @@ impl Eos {
         }
     }
 
+    /// Whether the pressure depends on the cylindrical radius (so that it need be computed).
+    #[inline]
+    pub fn needs_radius(&self) -> bool {
+        matches!(self, Eos::LocallyIsothermal { .. })
+    }
+
     /// Whether the energy equation is integrated (and total energy is a conserved figure).
     pub fn evolves_energy(&self) -> bool {
         matches!(self, Eos::Ideal { .. })

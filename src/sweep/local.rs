@@ -98,40 +98,54 @@ impl<const D: usize> Default for Elements<D> {
 }
 
 impl<const D: usize> Elements<D> {
-    /// The reals of `parts` (pair class `class_of(i)`) and their boundary images.
+    /// The reals of `parts` (pair class `class_of(i)`) and their boundary images. Every
+    /// array is filled in one parallel pass over reals and images.
     pub fn reals_and_images(
         parts: &Particles<D>,
         bx: &SimBox<D>,
         support: f64,
-        class_of: impl Fn(usize) -> u8,
+        class_of: impl Fn(usize) -> u8 + Sync,
     ) -> Self {
         let n = parts.len();
         let ghosts: Vec<Ghost<D>> = make_ghosts(bx, &parts.pos, support);
-        let mut e = Self {
-            pos: std::array::from_fn(|d| parts.pos[d].clone()),
-            vel: std::array::from_fn(|d| parts.vel[d].clone()),
-            mass: parts.mass.clone(),
-            u: parts.u.clone(),
-            sign: vec![[1.0; D]; n],
-            fold: vec![false; n],
-            class: (0..n).map(&class_of).collect(),
-            src: (0..n as u32).collect(),
-            n_real: n,
-        };
-        for g in &ghosts {
-            let o = g.owner as usize;
-            e.push(
-                g.pos,
-                std::array::from_fn(|d| parts.vel[d][o] * g.sign[d]),
-                parts.mass[o],
-                parts.u[o],
-                g.sign,
-                g.fold,
-                class::IMAGE,
-                g.owner,
-            );
+        // Element k: real k, or image k − n of its owner.
+        fn fill<T: Send, const D: usize>(
+            n: usize,
+            ghosts: &[Ghost<D>],
+            real: impl Fn(usize) -> T + Sync,
+            image: impl Fn(&Ghost<D>) -> T + Sync,
+        ) -> Vec<T> {
+            (0..n + ghosts.len())
+                .into_par_iter()
+                .with_min_len(1 << 14)
+                .map(|k| {
+                    if k < n {
+                        real(k)
+                    } else {
+                        image(&ghosts[k - n])
+                    }
+                })
+                .collect()
         }
-        e
+        let owner = |g: &Ghost<D>| g.owner as usize;
+        Self {
+            pos: std::array::from_fn(|d| fill(n, &ghosts, |k| parts.pos[d][k], |g| g.pos[d])),
+            vel: std::array::from_fn(|d| {
+                fill(
+                    n,
+                    &ghosts,
+                    |k| parts.vel[d][k],
+                    |g| parts.vel[d][owner(g)] * g.sign[d],
+                )
+            }),
+            mass: fill(n, &ghosts, |k| parts.mass[k], |g| parts.mass[owner(g)]),
+            u: fill(n, &ghosts, |k| parts.u[k], |g| parts.u[owner(g)]),
+            sign: fill(n, &ghosts, |_| [1.0; D], |g| g.sign),
+            fold: fill(n, &ghosts, |_| false, |g| g.fold),
+            class: fill(n, &ghosts, &class_of, |_| class::IMAGE),
+            src: fill(n, &ghosts, |k| k as u32, |g| g.owner),
+            n_real: n,
+        }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -250,13 +264,26 @@ impl<const D: usize> Local<D> {
         let n = e.n_real;
         let (order, cells) = grid.index_particles(&e.pos);
         let total = order.len();
-        let mut real_at = vec![0u32; n];
-        let cell = cells.keys_in_order();
-        for (k, &o) in order.iter().enumerate() {
-            if (o as usize) < n {
-                real_at[o as usize] = k as u32;
-            }
-        }
+        // Two serial loops side by side.
+        let (real_at, cell) = rayon::join(
+            || {
+                let mut real_at = vec![0u32; n];
+                for (k, &o) in order.iter().enumerate() {
+                    if (o as usize) < n {
+                        real_at[o as usize] = k as u32;
+                    }
+                }
+                real_at
+            },
+            || cells.keys_in_order(),
+        );
+        let filled = |x: f64| -> Vec<f64> {
+            (0..total)
+                .into_par_iter()
+                .with_min_len(1 << 14)
+                .map(|_| x)
+                .collect()
+        };
         fn pick<T: Copy + Send + Sync>(order: &[u32], v: &[T]) -> Vec<T> {
             order
                 .par_iter()
@@ -297,12 +324,12 @@ impl<const D: usize> Local<D> {
             element: order,
             real_at,
             v_av: Vec::new(),
-            rho: vec![0.0; total],
-            p: vec![0.0; total],
-            cs: vec![0.0; total],
-            av_scale: vec![1.0; total],
+            rho: filled(0.0),
+            p: filled(0.0),
+            cs: filled(0.0),
+            av_scale: filled(1.0),
             vgrad: crate::memory::filled_vec(total, [[0.0; D]; D]),
-            nu: vec![0.0; total],
+            nu: filled(0.0),
             stress: crate::memory::filled_vec(total, [[0.0; D]; D]),
         }
     }

@@ -236,12 +236,18 @@ impl Dependencies {
             owner_slabs: vec![Vec::new(); ns],
             ghosts_of: vec![Vec::new(); ns],
         };
-        for k in 0..local.len() {
-            if !local.is_ghost[k] || local.owner[k] == local::REMOTE {
-                continue;
-            }
-            let (sg, so) = (local.slab_of(k), local.slab_of(local.owner[k] as usize));
-            dep.ghosts_of[so].push(k as u32);
+        // The ghosts with a local owner, and their and their owners' slabs, in order.
+        let ghosts: Vec<(u32, usize, usize)> = (0..local.len())
+            .into_par_iter()
+            .with_min_len(1 << 14)
+            .filter(|&k| local.is_ghost[k] && local.owner[k] != local::REMOTE)
+            .map(|k| {
+                let o = local.owner[k] as usize;
+                (k as u32, local.slab_of(k), local.slab_of(o))
+            })
+            .collect();
+        for (k, sg, so) in ghosts {
+            dep.ghosts_of[so].push(k);
             if sg != so {
                 if !dep.ghost_slabs[so].contains(&sg) {
                     dep.ghost_slabs[so].push(sg);
@@ -629,7 +635,15 @@ fn finish_reals<const D: usize>(
                         Some(gamma) => {
                             smoothed_pressure(gamma, work[o].mu_w, mass[o], u[o], w0, rho)
                         }
-                        None => phys.eos.pressure_sound_speed(rho, u[o], radius(start + o)),
+                        None => {
+                            // Only the locally isothermal gas needs the radius (a `hypot`).
+                            let r = if phys.eos.needs_radius() {
+                                radius(start + o)
+                            } else {
+                                0.0
+                            };
+                            phys.eos.pressure_sound_speed(rho, u[o], r)
+                        }
                     };
                     (*rho_k, *p_k, *cs_k) = (rho, p, cs);
                 });
