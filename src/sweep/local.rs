@@ -108,24 +108,17 @@ impl<const D: usize> Elements<D> {
     ) -> Self {
         let n = parts.len();
         let ghosts: Vec<Ghost<D>> = make_ghosts(bx, &parts.pos, support);
-        // Element k: real k, or image k − n of its owner.
+        // The reals' values, then the images', each part written in place in parallel.
         fn fill<T: Send, const D: usize>(
             n: usize,
             ghosts: &[Ghost<D>],
-            real: impl Fn(usize) -> T + Sync,
-            image: impl Fn(&Ghost<D>) -> T + Sync,
+            real: impl Fn(usize) -> T + Sync + Send,
+            image: impl Fn(&Ghost<D>) -> T + Sync + Send,
         ) -> Vec<T> {
-            (0..n + ghosts.len())
-                .into_par_iter()
-                .with_min_len(1 << 14)
-                .map(|k| {
-                    if k < n {
-                        real(k)
-                    } else {
-                        image(&ghosts[k - n])
-                    }
-                })
-                .collect()
+            let mut v = Vec::with_capacity(n + ghosts.len());
+            v.par_extend((0..n).into_par_iter().with_min_len(1 << 14).map(real));
+            v.par_extend(ghosts.par_iter().with_min_len(1 << 12).map(image));
+            v
         }
         let owner = |g: &Ghost<D>| g.owner as usize;
         Self {
