@@ -110,33 +110,34 @@ impl<const D: usize> Elements<D> {
         let ghosts: Vec<Ghost<D>> = make_ghosts(bx, &parts.pos, support);
         // The reals' values, then the images', each part written in place in parallel.
         fn fill<T: Send, const D: usize>(
-            n: usize,
+            reals: impl IndexedParallelIterator<Item = T>,
             ghosts: &[Ghost<D>],
-            real: impl Fn(usize) -> T + Sync + Send,
             image: impl Fn(&Ghost<D>) -> T + Sync + Send,
         ) -> Vec<T> {
-            let mut v = Vec::with_capacity(n + ghosts.len());
-            v.par_extend((0..n).into_par_iter().with_min_len(1 << 14).map(real));
+            let mut v = Vec::with_capacity(reals.len() + ghosts.len());
+            v.par_extend(reals.with_min_len(1 << 14));
             v.par_extend(ghosts.par_iter().with_min_len(1 << 12).map(image));
             v
         }
+        fn copy(x: &[f64]) -> rayon::iter::Copied<rayon::slice::Iter<'_, f64>> {
+            x.par_iter().copied()
+        }
         let owner = |g: &Ghost<D>| g.owner as usize;
         Self {
-            pos: std::array::from_fn(|d| fill(n, &ghosts, |k| parts.pos[d][k], |g| g.pos[d])),
+            pos: std::array::from_fn(|d| fill(copy(&parts.pos[d]), &ghosts, |g| g.pos[d])),
             vel: std::array::from_fn(|d| {
-                fill(
-                    n,
-                    &ghosts,
-                    |k| parts.vel[d][k],
-                    |g| parts.vel[d][owner(g)] * g.sign[d],
-                )
+                fill(copy(&parts.vel[d]), &ghosts, |g| {
+                    parts.vel[d][owner(g)] * g.sign[d]
+                })
             }),
-            mass: fill(n, &ghosts, |k| parts.mass[k], |g| parts.mass[owner(g)]),
-            u: fill(n, &ghosts, |k| parts.u[k], |g| parts.u[owner(g)]),
-            sign: fill(n, &ghosts, |_| [1.0; D], |g| g.sign),
-            fold: fill(n, &ghosts, |_| false, |g| g.fold),
-            class: fill(n, &ghosts, &class_of, |_| class::IMAGE),
-            src: fill(n, &ghosts, |k| k as u32, |g| g.owner),
+            mass: fill(copy(&parts.mass), &ghosts, |g| parts.mass[owner(g)]),
+            u: fill(copy(&parts.u), &ghosts, |g| parts.u[owner(g)]),
+            sign: fill(rayon::iter::repeat_n([1.0; D], n), &ghosts, |g| g.sign),
+            fold: fill(rayon::iter::repeat_n(false, n), &ghosts, |g| g.fold),
+            class: fill((0..n).into_par_iter().map(&class_of), &ghosts, |_| {
+                class::IMAGE
+            }),
+            src: fill((0..n as u32).into_par_iter(), &ghosts, |g| g.owner),
             n_real: n,
         }
     }
