@@ -3,7 +3,9 @@
 //! per core, the window's peak memory, and the process's peak memory — for each thread count,
 //! with the time per stage of the sweep, the time outside it, the speed-up and parallel
 //! efficiency over one thread, and the floating-point operations and bytes moved per pair
-//! of each loop ([`crate::sweep::cost`]).
+//! of each loop ([`crate::sweep::cost`]). The thread counts run one after another, or
+//! stepped in turn on a particle set each ([`run_alternating`]): on a shared machine whose
+//! speed drifts, their ratio is then measured in one period.
 
 use std::time::Instant;
 
@@ -131,63 +133,142 @@ pub fn uniform_box(
     Ok((p, bx, 0.5 * support))
 }
 
+/// A benchmark in progress: the box after its warm-up evaluation, and what its steps have
+/// added up. [`run_one`] steps one to the end; [`run_alternating`] steps several in turn.
+pub struct BenchRun {
+    p: Particles<3>,
+    bx: SimBox<3>,
+    h: f64,
+    phys: Physics<3>,
+    ctl: StepControl,
+    window: Window,
+    /// The pool's threads (set-up, steps and the closing count run on one pool).
+    threads: usize,
+    steps: usize,
+    /// Seconds of the steps (their own time: another run's steps in between not counted).
+    secs: f64,
+    pairs: u64,
+    peak: usize,
+    times: crate::sweep::StageTimes,
+    last_pairs: u64,
+}
+
+impl BenchRun {
+    /// Sets up the box of about `n` particles and evaluates it once (the warm-up), on the
+    /// current rayon pool.
+    pub fn new(n: usize, neighbours: f64, window: Window) -> Result<Self> {
+        let (mut p, bx, h) = uniform_box(n, neighbours, 7)?;
+        let phys = Physics::hydro(
+            Kernel::<3>::new(h),
+            Eos::Ideal { gamma: 5.0 / 3.0 },
+            ArtificialViscosity::for_shocks(),
+        );
+        let warm = evaluate(&mut p, &bx, &phys, window);
+        Ok(Self {
+            p,
+            bx,
+            h,
+            phys,
+            ctl: StepControl::default(),
+            window,
+            threads: rayon::current_num_threads(),
+            steps: 0,
+            secs: 0.0,
+            pairs: 0,
+            peak: warm.peak_pairs,
+            times: crate::sweep::StageTimes::default(),
+            last_pairs: warm.pairs,
+        })
+    }
+
+    /// One KDK step, timed.
+    pub fn step(&mut self) {
+        let start = Instant::now();
+        let dt = time_step(&self.p, self.h, &self.ctl, true);
+        let s = kdk_step(&mut self.p, &self.bx, &self.phys, self.window, dt);
+        self.secs += start.elapsed().as_secs_f64();
+        self.steps += 1;
+        self.pairs += s.pairs;
+        self.last_pairs = s.pairs;
+        self.peak = self.peak.max(s.peak_pairs);
+        self.times.add(&s.times);
+    }
+
+    /// The figures of the steps taken (at least one). The peak resident memory is the
+    /// process's: with runs alternating it holds every run's particles.
+    pub fn result(&self) -> BenchResult {
+        let (steps, secs, pairs, p) = (self.steps.max(1), self.secs, self.pairs, &self.p);
+        let times_per_step = self.times.scaled(1.0 / steps as f64);
+        let in_sweep = times_per_step.total();
+        let threads = self.threads;
+        let per_step_pairs = pairs as f64 / steps as f64;
+        // The peak memory of the steps, before the count below builds a working set of its
+        // own.
+        let peak_rss = peak_rss_bytes();
+        // The last evaluation's positions are the particles' (the final kick moves none).
+        let support = self.phys.kernel.support();
+        let tested = candidates(&Local::build(p, &self.bx, support), support);
+        let setting = Setting::of(&self.phys, tested, self.last_pairs);
+        let cost = sweep_cost::<3>(&setting);
+        BenchResult {
+            particles: p.len(),
+            threads,
+            window: format!("{:?}", self.window),
+            steps,
+            mean_neighbours: 2.0 * per_step_pairs / p.len() as f64,
+            seconds_per_step: secs / steps as f64,
+            particle_updates_per_second: p.len() as f64 * steps as f64 / secs,
+            pairs_per_second: pairs as f64 / secs,
+            pairs_per_second_per_core: pairs as f64 / secs / threads as f64,
+            peak_window_pairs: self.peak,
+            peak_window_bytes: self.peak * crate::sweep::pairs::BYTES_PER_PAIR,
+            full_list_bytes: per_step_pairs as usize * crate::sweep::pairs::BYTES_PER_PAIR,
+            peak_rss_bytes: peak_rss,
+            outside_sweep_seconds_per_step: (secs / steps as f64 - in_sweep).max(0.0),
+            times_per_step,
+            speedup: None,
+            parallel_efficiency: None,
+            candidates_per_pair: setting.candidates_per_pair,
+            cells_per_pair: setting.cells_per_pair,
+            cost_per_pair: cost,
+            flops_per_pair: cost.total().flops,
+            bytes_per_pair: cost.total().bytes,
+        }
+    }
+}
+
 /// Runs `steps` KDK steps (after one warm-up evaluation) with the current rayon pool.
 pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Result<BenchResult> {
-    let (mut p, bx, h) = uniform_box(n, neighbours, 7)?;
-    let phys = Physics::hydro(
-        Kernel::<3>::new(h),
-        Eos::Ideal { gamma: 5.0 / 3.0 },
-        ArtificialViscosity::for_shocks(),
-    );
-    let ctl = StepControl::default();
-    let warm = evaluate(&mut p, &bx, &phys, window);
-    let start = Instant::now();
-    let mut pairs = 0u64;
-    let mut peak = warm.peak_pairs;
-    let mut times = crate::sweep::StageTimes::default();
-    let mut last_pairs = warm.pairs;
+    let mut run = BenchRun::new(n, neighbours, window)?;
     for _ in 0..steps {
-        let dt = time_step(&p, h, &ctl, true);
-        let s = kdk_step(&mut p, &bx, &phys, window, dt);
-        pairs += s.pairs;
-        last_pairs = s.pairs;
-        peak = peak.max(s.peak_pairs);
-        times.add(&s.times);
+        run.step();
     }
-    let times_per_step = times.scaled(1.0 / steps as f64);
-    let secs = start.elapsed().as_secs_f64();
-    let in_sweep = times_per_step.total();
-    let threads = rayon::current_num_threads();
-    let per_step_pairs = pairs as f64 / steps as f64;
-    // The peak memory of the steps, before the count below builds a working set of its own.
-    let peak_rss = peak_rss_bytes();
-    // The last evaluation's positions are the particles' (the final kick moves none).
-    let support = phys.kernel.support();
-    let tested = candidates(&Local::build(&p, &bx, support), support);
-    let setting = Setting::of(&phys, tested, last_pairs);
-    let cost = sweep_cost::<3>(&setting);
-    Ok(BenchResult {
-        particles: p.len(),
-        threads,
-        window: format!("{window:?}"),
-        steps,
-        mean_neighbours: 2.0 * per_step_pairs / p.len() as f64,
-        seconds_per_step: secs / steps as f64,
-        particle_updates_per_second: p.len() as f64 * steps as f64 / secs,
-        pairs_per_second: pairs as f64 / secs,
-        pairs_per_second_per_core: pairs as f64 / secs / threads as f64,
-        peak_window_pairs: peak,
-        peak_window_bytes: peak * crate::sweep::pairs::BYTES_PER_PAIR,
-        full_list_bytes: per_step_pairs as usize * crate::sweep::pairs::BYTES_PER_PAIR,
-        peak_rss_bytes: peak_rss,
-        outside_sweep_seconds_per_step: (secs / steps as f64 - in_sweep).max(0.0),
-        times_per_step,
-        speedup: None,
-        parallel_efficiency: None,
-        candidates_per_pair: setting.candidates_per_pair,
-        cells_per_pair: setting.cells_per_pair,
-        cost_per_pair: cost,
-        flops_per_pair: cost.total().flops,
-        bytes_per_pair: cost.total().bytes,
-    })
+    Ok(run.result())
+}
+
+/// One run per pool, on a particle set of its own, stepped in turn — a step on each pool,
+/// then the next step on each —, so that a machine whose speed drifts (a shared one) slows
+/// them alike and their ratio is measured in one period. Each step starts with caches
+/// that the other runs' steps have filled; the results come in the pools' order.
+pub fn run_alternating(
+    n: usize,
+    neighbours: f64,
+    steps: usize,
+    window: Window,
+    pools: &[rayon::ThreadPool],
+) -> Result<Vec<BenchResult>> {
+    let mut runs = pools
+        .iter()
+        .map(|pool| pool.install(|| BenchRun::new(n, neighbours, window)))
+        .collect::<Result<Vec<_>>>()?;
+    for _ in 0..steps {
+        for (pool, run) in pools.iter().zip(&mut runs) {
+            pool.install(|| run.step());
+        }
+    }
+    Ok(pools
+        .iter()
+        .zip(&runs)
+        .map(|(pool, run)| pool.install(|| run.result()))
+        .collect())
 }

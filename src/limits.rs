@@ -187,12 +187,13 @@ pub fn check_files_per_snapshot(files: usize) -> Result<()> {
     Ok(())
 }
 
-/// Refuses more than [`MAX_THREADS_PER_CORE`] worker threads per core of `cores`.
-pub fn check_threads(threads: usize, cores: usize) -> Result<()> {
+/// Refuses more than [`MAX_THREADS_PER_CORE`] worker threads per core of `cores`, naming
+/// the command-line option (`--threads`, `--with-threads`) that asked for them.
+pub fn check_threads(option: &str, threads: usize, cores: usize) -> Result<()> {
     let max = MAX_THREADS_PER_CORE * cores.max(1);
     if threads > max {
         bail!(
-            "--threads: {threads} is more than {max} ({MAX_THREADS_PER_CORE} per core of the {cores} here)"
+            "{option}: {threads} is more than {max} ({MAX_THREADS_PER_CORE} per core of the {cores} here)"
         );
     }
     Ok(())
@@ -235,8 +236,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("output.files_per_snapshot"), "{e}");
-        check_threads(32, 2).unwrap();
-        let e = check_threads(100_000, 2).unwrap_err().to_string();
+        check_threads("--threads", 32, 2).unwrap();
+        let e = check_threads("--threads", 100_000, 2)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("--threads") && e.contains("100000"), "{e}");
     }
 }

@@ -133,6 +133,10 @@ enum Command {
         /// Also write every row to this CSV file (for plotting).
         #[arg(long)]
         csv: Option<PathBuf>,
+        /// Step the thread counts in turn, a step each, on a particle set each (a machine
+        /// whose speed drifts then slows them alike: the speed-up is measured in one period).
+        #[arg(long)]
+        alternate: bool,
     },
     /// Load imbalance and ghost fraction of the k-d domain decomposition on a 2D disk and a
     /// 3D clustered box, without running a simulation.
@@ -350,7 +354,7 @@ fn execute_mpi(job: &Job) -> Option<Result<Ended>> {
 fn real_main(cli: Cli) -> Result<()> {
     if let Some(t) = cli.threads {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        sphdisk::limits::check_threads(t, cores)?;
+        sphdisk::limits::check_threads("--threads", t, cores)?;
     }
     // Without --threads rayon's default (RAYON_NUM_THREADS, else one per core). The step loop
     // runs on one of these threads (`execute`), so they get the main thread's 8 MiB stack.
@@ -626,7 +630,15 @@ fn real_main(cli: Cli) -> Result<()> {
             window,
             json,
             csv,
+            alternate,
         } => {
+            if steps == 0 {
+                anyhow::bail!("--steps: at least 1");
+            }
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            for &t in &with_threads {
+                sphdisk::limits::check_threads("--with-threads", t, cores)?;
+            }
             if let Some(path) = &csv {
                 // Refuse an unwritable path before the measurements, not after.
                 std::fs::write(path, "")
@@ -655,10 +667,25 @@ fn real_main(cli: Cli) -> Result<()> {
             }
             for &np in &n {
                 let mut one_thread: Option<sphdisk::bench::BenchResult> = None;
-                for &t in &with_threads {
-                    let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build()?;
-                    let mut r =
-                        pool.install(|| sphdisk::bench::run_one(np, neighbours, steps, window))?;
+                let pools = with_threads
+                    .iter()
+                    .map(|&t| rayon::ThreadPoolBuilder::new().num_threads(t).build())
+                    .collect::<Result<Vec<_>, _>>()?;
+                // Alternating, every run ends before the first row; else each row is
+                // printed as its run ends.
+                let mut done = if alternate {
+                    sphdisk::bench::run_alternating(np, neighbours, steps, window, &pools)?
+                } else {
+                    Vec::new()
+                }
+                .into_iter();
+                for pool in &pools {
+                    let mut r = match done.next() {
+                        Some(r) => r,
+                        None => {
+                            pool.install(|| sphdisk::bench::run_one(np, neighbours, steps, window))?
+                        }
+                    };
                     if r.threads == 1 {
                         one_thread = Some(r.clone());
                     } else if let Some(one) = &one_thread {

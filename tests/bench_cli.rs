@@ -91,3 +91,65 @@ fn bench_writes_a_consistent_csv_of_thread_scaling() {
     assert_ne!(code, 0);
     assert!(err.contains("--csv") && err.lines().count() <= 2, "{err}");
 }
+
+/// `--alternate`: the thread counts step in turn, a particle set each — one row per thread
+/// count as without it, each over the same particles and steps (the same pairs, to the
+/// last bits of the positions), the speed-up the ratio of their own step times.
+#[test]
+fn bench_alternate_steps_the_thread_counts_in_turn() {
+    let (code, out, err) = sphdisk_cli(
+        None,
+        &[
+            "bench",
+            "--n",
+            "4000",
+            "--steps",
+            "2",
+            "--with-threads",
+            "1",
+            "--with-threads",
+            "2",
+            "--alternate",
+            "--json",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let rows: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), 2, "{out}");
+    let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
+    assert_eq!(f(&rows[0], "threads"), 1.0);
+    assert_eq!(f(&rows[1], "threads"), 2.0);
+    for r in &rows {
+        assert_eq!(f(r, "steps"), 2.0);
+        assert_eq!(f(r, "particles"), f(&rows[0], "particles"));
+    }
+    // The two sets start alike and differ after two steps only in the last bits of the
+    // sums' order on two threads: a pair at the support's edge at most.
+    let (n1, n2) = (
+        f(&rows[0], "mean_neighbours"),
+        f(&rows[1], "mean_neighbours"),
+    );
+    assert!(
+        (n1 - n2).abs() <= 2.0 / f(&rows[0], "particles"),
+        "{n1} vs {n2}"
+    );
+    let s = f(&rows[1], "speedup");
+    let want = f(&rows[0], "seconds_per_step") / f(&rows[1], "seconds_per_step");
+    assert!((s - want).abs() <= 1e-12 * want, "{s} vs {want}");
+    assert!(rows[0]["speedup"].is_null());
+
+    // No steps to time, or an absurd thread count: refused before anything is measured,
+    // naming the option.
+    let (code, _, err) = sphdisk_cli(None, &["bench", "--n", "4000", "--steps", "0"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("--steps") && err.lines().count() <= 2, "{err}");
+    let (code, _, err) = sphdisk_cli(None, &["bench", "--n", "4000", "--with-threads", "100000"]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("--with-threads") && err.contains("100000") && err.lines().count() <= 2,
+        "{err}"
+    );
+}
