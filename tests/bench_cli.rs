@@ -6,25 +6,30 @@
 mod common;
 use common::sphdisk_cli;
 
+/// A small benchmark on 1 and 2 threads, two steps, with `extra` arguments.
+fn scaling_args<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "bench",
+        "--n",
+        "4000",
+        "--steps",
+        "2",
+        "--with-threads",
+        "1",
+        "--with-threads",
+        "2",
+    ];
+    args.extend_from_slice(extra);
+    args
+}
+
 #[test]
 fn bench_writes_a_consistent_csv_of_thread_scaling() {
     let d = tempfile::tempdir().unwrap();
     let csv = d.path().join("scaling.csv");
     let (code, out, err) = sphdisk_cli(
         Some(d.path()),
-        &[
-            "bench",
-            "--n",
-            "4000",
-            "--steps",
-            "2",
-            "--with-threads",
-            "1",
-            "--with-threads",
-            "2",
-            "--csv",
-            csv.to_str().unwrap(),
-        ],
+        &scaling_args(&["--csv", csv.to_str().unwrap()]),
     );
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("parallel efficiency"), "{out}");
@@ -97,22 +102,7 @@ fn bench_writes_a_consistent_csv_of_thread_scaling() {
 /// last bits of the positions), the speed-up the ratio of their own step times.
 #[test]
 fn bench_alternate_steps_the_thread_counts_in_turn() {
-    let (code, out, err) = sphdisk_cli(
-        None,
-        &[
-            "bench",
-            "--n",
-            "4000",
-            "--steps",
-            "2",
-            "--with-threads",
-            "1",
-            "--with-threads",
-            "2",
-            "--alternate",
-            "--json",
-        ],
-    );
+    let (code, out, err) = sphdisk_cli(None, &scaling_args(&["--alternate", "--json"]));
     assert_eq!(code, 0, "{err}");
     let rows: Vec<serde_json::Value> = out
         .lines()
