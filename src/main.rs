@@ -352,8 +352,8 @@ fn execute_mpi(job: &Job) -> Option<Result<Ended>> {
 }
 
 fn real_main(cli: Cli) -> Result<()> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     if let Some(t) = cli.threads {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         sphdisk::limits::check_threads("--threads", t, cores)?;
     }
     // Without --threads rayon's default (RAYON_NUM_THREADS, else one per core). The step loop
@@ -635,7 +635,6 @@ fn real_main(cli: Cli) -> Result<()> {
             if steps == 0 {
                 anyhow::bail!("--steps: at least 1");
             }
-            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
             for &t in &with_threads {
                 sphdisk::limits::check_threads("--with-threads", t, cores)?;
             }
@@ -673,15 +672,13 @@ fn real_main(cli: Cli) -> Result<()> {
                     .collect::<Result<Vec<_>, _>>()?;
                 // Alternating, every run ends before the first row; else each row is
                 // printed as its run ends.
-                let mut done = if alternate {
-                    sphdisk::bench::run_alternating(np, neighbours, steps, window, &pools)?
-                } else {
-                    Vec::new()
-                }
-                .into_iter();
+                let mut alternated = alternate
+                    .then(|| sphdisk::bench::run_alternating(np, neighbours, steps, window, &pools))
+                    .transpose()?
+                    .map(Vec::into_iter);
                 for pool in &pools {
-                    let mut r = match done.next() {
-                        Some(r) => r,
+                    let mut r = match alternated.as_mut() {
+                        Some(results) => results.next().expect("one result per pool"),
                         None => {
                             pool.install(|| sphdisk::bench::run_one(np, neighbours, steps, window))?
                         }
