@@ -17,6 +17,8 @@
 //! against 31 000 with one arena). All threads therefore share the main arena: the sweep
 //! allocates in large blocks (a slab's arrays, a group's pairs), so its lock is rarely
 //! contended.
+//! The sums' per-task buffers come from a pool of scratch vectors ([`scratch_vec`]),
+//! handed out as their last user left them: a task clears only the entries it uses.
 //! Elsewhere than Linux with glibc the allocator is left as it is.
 
 /// Sets glibc's mmap threshold to its largest value (32 MiB: blocks up to that come from
@@ -84,6 +86,57 @@ pub fn keep_vec<T: Send + 'static>(v: Vec<T>) {
     }
     let mut k = KEPT.lock().unwrap_or_else(|e| e.into_inner());
     if k.len() < MAX_KEPT {
+        k.push(Box::new(v));
+    }
+}
+
+/// Scratch vectors kept between uses by [`scratch_vec`] and [`keep_scratch`]: the sums'
+/// per-task buffers, reused from sum to sum instead of allocated and filled afresh.
+static SCRATCH: std::sync::Mutex<Vec<Box<dyn std::any::Any + Send>>> =
+    std::sync::Mutex::new(Vec::new());
+
+/// At most this many scratch vectors are kept (a batch of small slabs holds one per task of
+/// each of its blocks).
+const MAX_SCRATCH: usize = 64;
+
+/// Scratch vectors larger than this are dropped rather than kept.
+const SCRATCH_BYTES: usize = 64 << 20;
+
+/// A vector of `len` elements for scratch use: a kept vector of the same type, whose
+/// elements hold whatever its last user left in them (the caller writes every element
+/// before it reads it), grown with `fill` if it was shorter; else a new one filled with
+/// `fill`.
+pub fn scratch_vec<T: Copy + Send + 'static>(len: usize, fill: T) -> Vec<T> {
+    let kept = {
+        let mut k = SCRATCH.lock().unwrap_or_else(|e| e.into_inner());
+        // The most recently kept first: its memory is the likeliest to be in cache.
+        k.iter()
+            .rposition(|b| b.is::<Vec<T>>())
+            .map(|i| k.remove(i))
+    };
+    match kept.and_then(|b| b.downcast::<Vec<T>>().ok()) {
+        Some(mut v) => {
+            v.truncate(len);
+            v.resize(len, fill);
+            *v
+        }
+        None => vec![fill; len],
+    }
+}
+
+/// Drops every kept scratch vector.
+pub fn clear_scratch() {
+    SCRATCH.lock().unwrap_or_else(|e| e.into_inner()).clear();
+}
+
+/// Keeps `v` for a later [`scratch_vec`] of its type (unless too many or too large are
+/// kept already).
+pub fn keep_scratch<T: Send + 'static>(v: Vec<T>) {
+    if v.capacity() * std::mem::size_of::<T>() > SCRATCH_BYTES {
+        return;
+    }
+    let mut k = SCRATCH.lock().unwrap_or_else(|e| e.into_inner());
+    if k.len() < MAX_SCRATCH {
         k.push(Box::new(v));
     }
 }

@@ -1,7 +1,7 @@
 //! One block of the sweep's interaction window: the pairs whose first partner lies in one
 //! x-slab (the second in the same or the previous slab), found once from the grid's half
 //! stencil, and the three sums accumulated from them in parallel without write conflicts
-//! (each task into its own buffer over the block's particles, merged afterwards).
+//! (each task into its own buffer over the particles its pairs touch, merged afterwards).
 
 use rayon::prelude::*;
 
@@ -42,9 +42,61 @@ pub struct PairBlock {
     pub slab: usize,
     /// Start of the previous slab: every partner lies in `j_start..i_end`.
     j_start: usize,
+    /// Start of the block's own slab (of its first partners).
+    i_start: usize,
     i_end: usize,
     groups: Vec<Vec<Pair>>,
+    /// What each group's pairs reach below its first partners.
+    reach: Vec<Reach>,
     len: usize,
+}
+
+/// The second partners of one group's pairs: those in the previous slab lie in
+/// `prev_lo..prev_hi` (empty when there are none), those in the group's own slab at or
+/// above `cur_lo` (at most the group's first particle, so that its first partners are
+/// included). A sum's task touches only these particles and its first partners.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Reach {
+    prev_lo: u32,
+    prev_hi: u32,
+    cur_lo: u32,
+}
+
+impl Reach {
+    /// The extent of `pairs`, found for first partners from `g0` on in a slab starting at
+    /// `i_start`. Without branches: whether a partner lies in the previous slab follows no
+    /// pattern the predictor could learn.
+    fn of(pairs: &[Pair], g0: usize, i_start: usize) -> Self {
+        let is = i_start as u32;
+        let mut r = Reach {
+            prev_lo: u32::MAX,
+            prev_hi: 0,
+            cur_lo: g0 as u32,
+        };
+        for p in pairs {
+            let prev = p.j < is;
+            r.prev_lo = r.prev_lo.min(if prev { p.j } else { u32::MAX });
+            r.prev_hi = r.prev_hi.max(if prev { p.j + 1 } else { 0 });
+            r.cur_lo = r.cur_lo.min(if prev { u32::MAX } else { p.j });
+        }
+        r
+    }
+}
+
+/// The particles one task of a sum writes, as offsets from the block's `j_start`: two
+/// ranges, one in the previous slab and one in the block's own. Its buffer is cleared and
+/// merged over these only.
+#[derive(Clone, Debug, PartialEq, Eq)]
+struct Span {
+    prev: std::ops::Range<usize>,
+    cur: std::ops::Range<usize>,
+}
+
+impl Span {
+    #[inline]
+    fn covers(&self, o: usize) -> bool {
+        self.prev.contains(&o) || self.cur.contains(&o)
+    }
 }
 
 /// Offsets of the half stencil: the neighbour cells with a smaller x-major index, i.e. the
@@ -259,7 +311,7 @@ impl PairBlock {
         let pos = &local.pos;
         let stencil = half_stencil::<D>();
 
-        let groups: Vec<Vec<Pair>> = (i_start..i_end)
+        let (groups, reach): (Vec<Vec<Pair>>, Vec<Reach>) = (i_start..i_end)
             .into_par_iter()
             .step_by(GRAIN)
             .map(|g0| {
@@ -301,16 +353,19 @@ impl PairBlock {
                 // so no pair is copied (a list that outgrew its capacity was, once).
                 GROUP_CAPACITY.set(GROUP_CAPACITY.get().max(pairs.len() + pairs.len() / 4));
                 pairs.shrink_to_fit();
-                pairs
+                let reach = Reach::of(&pairs, g0, i_start);
+                (pairs, reach)
             })
-            .collect();
+            .unzip();
 
         let len = groups.iter().map(Vec::len).sum();
         Self {
             slab,
             j_start,
+            i_start,
             i_end,
             groups,
+            reach,
             len,
         }
     }
@@ -329,28 +384,54 @@ impl PairBlock {
     }
 
     /// The groups cut into runs of at least `chunk` pairs (the last may be shorter), in
-    /// order: the tasks of a sum. Depends only on the pairs and `chunk`, so that a sum adds
-    /// its terms in the same order in every run with the same thread count.
-    fn runs(&self, chunk: usize) -> Vec<&[Vec<Pair>]> {
+    /// order, as ranges of group indices: the tasks of a sum. Depends only on the pairs and
+    /// `chunk`, so that a sum adds its terms in the same order in every run with the same
+    /// thread count.
+    fn runs(&self, chunk: usize) -> Vec<std::ops::Range<usize>> {
         let mut out = Vec::new();
         let (mut first, mut count) = (0, 0);
         for (k, g) in self.groups.iter().enumerate() {
             count += g.len();
             if count >= chunk {
-                out.push(&self.groups[first..=k]);
+                out.push(first..k + 1);
                 (first, count) = (k + 1, 0);
             }
         }
         if first < self.groups.len() {
-            out.push(&self.groups[first..]);
+            out.push(first..self.groups.len());
         }
         out
+    }
+
+    /// The particles the pairs of groups `run` touch, as offsets from `j_start`: their
+    /// first partners and their second partners in either slab.
+    fn span(&self, run: std::ops::Range<usize>) -> Span {
+        let end = (self.i_start + run.end * GRAIN).min(self.i_end);
+        let (mut prev_lo, mut prev_hi, mut cur_lo) = (u32::MAX, 0, u32::MAX);
+        for r in &self.reach[run] {
+            prev_lo = prev_lo.min(r.prev_lo);
+            prev_hi = prev_hi.max(r.prev_hi);
+            cur_lo = cur_lo.min(r.cur_lo);
+        }
+        let at = |k: u32| k as usize - self.j_start;
+        Span {
+            prev: if prev_lo < prev_hi {
+                at(prev_lo)..at(prev_hi)
+            } else {
+                0..0
+            },
+            cur: at(cur_lo)..end - self.j_start,
+        }
     }
 
     /// Runs `f` on every pair of every block in `blocks`, each task adding the two partners'
     /// contributions into its own buffer over its block's particles (no write conflicts,
     /// streaming access), then merges the buffers into `work` with `merge`, block after block
-    /// in the order given. The blocks' pairs are summed in parallel — several small blocks
+    /// in the order given. A task clears and merges only the particles its pairs touch
+    /// ([`Span`]: on two threads each task's half of the slab and the part of the previous
+    /// slab next to it, about half the block), in a buffer kept between sums
+    /// ([`crate::memory::scratch_vec`]) whose other entries are never read; a particle
+    /// outside a task's span would have had zero merged from it, which changes no sum. The blocks' pairs are summed in parallel — several small blocks
     /// at once, or a large one's runs of groups —, the merges in a fixed order, so that the
     /// result does not depend on how many blocks went together.
     ///
@@ -366,21 +447,24 @@ impl PairBlock {
         f: F,
         merge: M,
     ) where
-        A: Accumulator,
+        A: Accumulator + 'static,
         P: Fn(usize) -> S + Sync,
         F: Fn(&S, &Pair) -> (A, A) + Sync,
         M: Fn(&mut Work<D>, &A) + Sync,
     {
         let tasks = rayon::current_num_threads().max(1);
-        let partial = |b: &PairBlock| -> Vec<Vec<A>> {
+        let partial = |b: &PairBlock| -> Vec<(Vec<A>, Span)> {
             if b.is_empty() {
                 return Vec::new();
             }
             let n = b.i_end - b.j_start;
             let chunk = b.len.div_ceil(tasks).max(4096);
-            let run = |groups: &[Vec<Pair>]| {
-                let mut buf = vec![A::zero(); n];
-                for g in groups {
+            let run = |run: std::ops::Range<usize>| {
+                let span = b.span(run.clone());
+                let mut buf = crate::memory::scratch_vec(n, A::zero());
+                buf[span.prev.clone()].fill(A::zero());
+                buf[span.cur.clone()].fill(A::zero());
+                for g in &b.groups[run] {
                     for ps in g.chunk_by(|a, b| a.i == b.i) {
                         let i = ps[0].i as usize;
                         let si = prep(i);
@@ -393,16 +477,16 @@ impl PairBlock {
                         buf[i - b.j_start].add(&acc);
                     }
                 }
-                buf
+                (buf, span)
             };
-            let runs = b.runs(chunk);
+            let mut runs = b.runs(chunk);
             if runs.len() == 1 {
-                vec![run(runs[0])]
+                vec![run(runs.pop().expect("one run"))]
             } else {
                 runs.into_par_iter().map(run).collect()
             }
         };
-        let partials: Vec<Vec<Vec<A>>> = match blocks {
+        let partials: Vec<Vec<(Vec<A>, Span)>> = match blocks {
             [b] => vec![partial(b)],
             _ => blocks
                 .par_iter()
@@ -419,10 +503,15 @@ impl PairBlock {
                 .enumerate()
                 .with_min_len(1024)
                 .for_each(|(o, wk)| {
-                    for buf in bufs {
-                        merge(wk, &buf[o]);
+                    for (buf, span) in bufs {
+                        if span.covers(o) {
+                            merge(wk, &buf[o]);
+                        }
                     }
                 });
+        }
+        for (buf, _) in partials.into_iter().flatten() {
+            crate::memory::keep_scratch(buf);
         }
     }
 
@@ -664,6 +753,108 @@ fn cell_coords<const D: usize>(n: [usize; D], mut c: u64) -> [usize; D] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every partner a task's pairs write lies in that task's span (else the task would
+    /// write outside what its buffer clears and merges), for the runs of one, two and many
+    /// tasks; on two tasks each span holds well under the whole block (about half of it:
+    /// its half of the slab and the part of the previous slab next to that half).
+    #[test]
+    fn a_tasks_span_holds_every_partner_it_writes() {
+        let (p, bx, h) = crate::bench::uniform_box(8000, 50.0, 5).unwrap();
+        let kernel = Kernel::<3>::new(h);
+        let local = Local::build(&p, &bx, kernel.support());
+        for slab in 0..local.num_slabs() {
+            let b = PairBlock::find(&local, &kernel, slab);
+            let n = b.i_end - b.j_start;
+            for tasks in [1, 2, 7] {
+                let chunk = b.len.div_ceil(tasks).max(1);
+                let runs = b.runs(chunk);
+                let mut covered = vec![0usize; n];
+                for run in runs.clone() {
+                    let span = b.span(run.clone());
+                    assert!(span.prev.end <= b.i_start - b.j_start);
+                    assert!(span.cur.start >= b.i_start - b.j_start && span.cur.end <= n);
+                    for p in b.groups[run].iter().flatten() {
+                        for k in [p.i, p.j] {
+                            assert!(span.covers(k as usize - b.j_start), "slab {slab}: {p:?}");
+                        }
+                    }
+                    for (o, c) in covered.iter_mut().enumerate() {
+                        *c += span.covers(o) as usize;
+                    }
+                }
+                if tasks == 2 && slab > 0 && runs.len() == 2 {
+                    let mean = covered.iter().sum::<usize>() as f64 / (2 * n) as f64;
+                    // A slab one cell thick, cut in two along y: each half reaches its
+                    // own half of the previous slab and one row of cells beyond (1/8 of
+                    // a slab here): 0.5 + 1/8 on average, 0.59 measured; a span over the
+                    // whole block (1.0) fails.
+                    assert!(mean < 0.7, "slab {slab}: spans cover {mean} of the block");
+                }
+            }
+        }
+    }
+
+    /// The sums' buffers come back from the scratch pool holding what earlier sums left in
+    /// them; the entries a task reads are those it cleared. Poisoned with NaN (and then
+    /// with 1e300), the pool gives the same evaluation to the bit as freshly zeroed
+    /// buffers. (That a span holds every partner is the test above.)
+    #[test]
+    fn stale_scratch_buffers_change_no_sum() {
+        use crate::physics::artificial_viscosity::ArtificialViscosity;
+        use crate::physics::eos::Eos;
+        let (mut p0, bx, h) = crate::bench::uniform_box(4000, 50.0, 9).unwrap();
+        // A converging, shearing flow, so that the gradient and the AV have work to do.
+        for i in 0..p0.len() {
+            let x: [f64; 3] = std::array::from_fn(|d| p0.pos[d][i]);
+            p0.vel[0][i] = (6.0 * x[0]).sin() + x[1];
+            p0.vel[1][i] = (5.0 * x[2]).cos();
+            p0.vel[2][i] = -x[0] * x[1];
+        }
+        let phys = crate::sweep::Physics::hydro(
+            Kernel::<3>::new(h),
+            Eos::Ideal { gamma: 5.0 / 3.0 },
+            ArtificialViscosity::for_shocks(),
+        );
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let run = || {
+            let mut p = p0.clone();
+            pool.install(|| {
+                crate::sweep::evaluate(&mut p, &bx, &phys, crate::sweep::Window::Sweep)
+            });
+            p
+        };
+        // Fresh buffers, filled with zeros when allocated.
+        crate::memory::clear_scratch();
+        let clean = run();
+        for poison in [f64::NAN, 1e300] {
+            crate::memory::clear_scratch();
+            let n = 2 * p0.len();
+            for _ in 0..8 {
+                crate::memory::keep_scratch(vec![(poison, 7u32); n]);
+                crate::memory::keep_scratch(vec![[[poison; 3]; 3]; n]);
+                crate::memory::keep_scratch(vec![
+                    ForceSum::<3> {
+                        acc: [poison; 3],
+                        du: poison,
+                        diss: poison,
+                        vsig: poison,
+                    };
+                    n
+                ]);
+            }
+            let again = run();
+            assert_eq!(again.rho, clean.rho, "poison {poison}");
+            assert_eq!(again.interactions, clean.interactions);
+            assert_eq!(again.acc, clean.acc);
+            assert_eq!(again.du, clean.du);
+            assert_eq!(again.vsig, clean.vsig);
+            assert_eq!(again.vgrad, clean.vgrad);
+        }
+    }
 
     #[test]
     fn half_stencil_has_lower_cells_only() {
