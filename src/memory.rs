@@ -38,15 +38,47 @@ pub fn keep_freed_memory() {
     }
 }
 
+/// Vectors of any element type kept for reuse, at most `max` of them.
+struct Pool {
+    kept: std::sync::Mutex<Vec<Box<dyn std::any::Any + Send>>>,
+    max: usize,
+}
+
+impl Pool {
+    const fn new(max: usize) -> Self {
+        Self {
+            kept: std::sync::Mutex::new(Vec::new()),
+            max,
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<Box<dyn std::any::Any + Send>>> {
+        self.kept.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// A kept vector of element type `T`, the most recently kept (its memory is the
+    /// likeliest to be in cache), if there is one.
+    fn take<T: Send + 'static>(&self) -> Option<Vec<T>> {
+        let mut k = self.lock();
+        let i = k.iter().rposition(|b| b.is::<Vec<T>>())?;
+        k.remove(i).downcast::<Vec<T>>().ok().map(|v| *v)
+    }
+
+    /// Keeps `v` unless `max` vectors are kept already.
+    fn put<T: Send + 'static>(&self, v: Vec<T>) {
+        let mut k = self.lock();
+        if k.len() < self.max {
+            k.push(Box::new(v));
+        }
+    }
+}
+
 /// Vectors above the mmap threshold, kept from one evaluation for the next: glibc maps
 /// such blocks afresh at every allocation and unmaps them when freed, whatever the
 /// thresholds (at 10⁶ particles the accumulators, 144 MB, and the velocity gradients and
-/// stresses, 72 MB each, page-faulted in at every evaluation).
-static KEPT: std::sync::Mutex<Vec<Box<dyn std::any::Any + Send>>> =
-    std::sync::Mutex::new(Vec::new());
-
-/// At most this many vectors are kept (one evaluation holds a handful).
-const MAX_KEPT: usize = 16;
+/// stresses, 72 MB each, page-faulted in at every evaluation). At most 16 are kept (one
+/// evaluation holds a handful).
+static KEPT: Pool = Pool::new(16);
 
 /// Below this a vector comes from the heaps, which reuse its memory anyway.
 const KEEP_BYTES: usize = 32 << 20;
@@ -55,20 +87,14 @@ const KEEP_BYTES: usize = 32 << 20;
 /// allocated; filled in parallel either way.
 pub fn filled_vec<T: Copy + Send + Sync + 'static>(len: usize, value: T) -> Vec<T> {
     use rayon::prelude::*;
-    let kept = {
-        let mut k = KEPT.lock().unwrap_or_else(|e| e.into_inner());
-        k.iter()
-            .position(|b| b.is::<Vec<T>>())
-            .map(|i| k.swap_remove(i))
-    };
-    match kept.and_then(|b| b.downcast::<Vec<T>>().ok()) {
+    match KEPT.take::<T>() {
         Some(mut v) => {
             v.truncate(len);
             v.par_iter_mut()
                 .with_min_len(1 << 14)
                 .for_each(|x| *x = value);
             v.resize(len, value);
-            *v
+            v
         }
         None => (0..len)
             .into_par_iter()
@@ -81,23 +107,15 @@ pub fn filled_vec<T: Copy + Send + Sync + 'static>(len: usize, value: T) -> Vec<
 /// Keeps `v` for the next [`filled_vec`] of its type when it is large enough to be mapped
 /// afresh otherwise; drops it else.
 pub fn keep_vec<T: Send + 'static>(v: Vec<T>) {
-    if v.capacity() * std::mem::size_of::<T>() < KEEP_BYTES {
-        return;
-    }
-    let mut k = KEPT.lock().unwrap_or_else(|e| e.into_inner());
-    if k.len() < MAX_KEPT {
-        k.push(Box::new(v));
+    if v.capacity() * std::mem::size_of::<T>() >= KEEP_BYTES {
+        KEPT.put(v);
     }
 }
 
 /// Scratch vectors kept between uses by [`scratch_vec`] and [`keep_scratch`]: the sums'
-/// per-task buffers, reused from sum to sum instead of allocated and filled afresh.
-static SCRATCH: std::sync::Mutex<Vec<Box<dyn std::any::Any + Send>>> =
-    std::sync::Mutex::new(Vec::new());
-
-/// At most this many scratch vectors are kept (a batch of small slabs holds one per task of
-/// each of its blocks).
-const MAX_SCRATCH: usize = 64;
+/// per-task buffers, reused from sum to sum instead of allocated and filled afresh. At
+/// most 64 are kept (a batch of small slabs holds one per task of each of its blocks).
+static SCRATCH: Pool = Pool::new(64);
 
 /// Scratch vectors larger than this are dropped rather than kept.
 const SCRATCH_BYTES: usize = 64 << 20;
@@ -107,18 +125,11 @@ const SCRATCH_BYTES: usize = 64 << 20;
 /// before it reads it), grown with `fill` if it was shorter; else a new one filled with
 /// `fill`.
 pub fn scratch_vec<T: Copy + Send + 'static>(len: usize, fill: T) -> Vec<T> {
-    let kept = {
-        let mut k = SCRATCH.lock().unwrap_or_else(|e| e.into_inner());
-        // The most recently kept first: its memory is the likeliest to be in cache.
-        k.iter()
-            .rposition(|b| b.is::<Vec<T>>())
-            .map(|i| k.remove(i))
-    };
-    match kept.and_then(|b| b.downcast::<Vec<T>>().ok()) {
+    match SCRATCH.take::<T>() {
         Some(mut v) => {
             v.truncate(len);
             v.resize(len, fill);
-            *v
+            v
         }
         None => vec![fill; len],
     }
@@ -126,18 +137,14 @@ pub fn scratch_vec<T: Copy + Send + 'static>(len: usize, fill: T) -> Vec<T> {
 
 /// Drops every kept scratch vector.
 pub fn clear_scratch() {
-    SCRATCH.lock().unwrap_or_else(|e| e.into_inner()).clear();
+    SCRATCH.lock().clear();
 }
 
 /// Keeps `v` for a later [`scratch_vec`] of its type (unless too many or too large are
 /// kept already).
 pub fn keep_scratch<T: Send + 'static>(v: Vec<T>) {
-    if v.capacity() * std::mem::size_of::<T>() > SCRATCH_BYTES {
-        return;
-    }
-    let mut k = SCRATCH.lock().unwrap_or_else(|e| e.into_inner());
-    if k.len() < MAX_SCRATCH {
-        k.push(Box::new(v));
+    if v.capacity() * std::mem::size_of::<T>() <= SCRATCH_BYTES {
+        SCRATCH.put(v);
     }
 }
 
@@ -170,7 +177,7 @@ mod tests {
         assert!(longer.len() == n + 100 && longer.iter().all(|&x| x == -1.0));
         // Small vectors are not kept.
         keep_vec(vec![0u8; 16]);
-        let k = KEPT.lock().unwrap();
+        let k = KEPT.lock();
         assert!(k.iter().all(|b| !b.is::<Vec<u8>>()));
     }
 }

@@ -425,15 +425,15 @@ impl PairBlock {
     }
 
     /// Runs `f` on every pair of every block in `blocks`, each task adding the two partners'
-    /// contributions into its own buffer over its block's particles (no write conflicts,
-    /// streaming access), then merges the buffers into `work` with `merge`, block after block
-    /// in the order given. A task clears and merges only the particles its pairs touch
-    /// ([`Span`]: on two threads each task's half of the slab and the part of the previous
+    /// contributions into its own buffer (no write conflicts, streaming access), then merges
+    /// the buffers into `work` with `merge`, block after block in the order given. The
+    /// blocks' pairs are summed in parallel — several small blocks at once, or a large one's
+    /// runs of groups —, the merges in a fixed order, so that the result does not depend on
+    /// how many blocks went together. A task clears and merges only the particles its pairs
+    /// touch ([`Span`]: on two threads its half of the slab and the part of the previous
     /// slab next to it, about half the block), in a buffer kept between sums
     /// ([`crate::memory::scratch_vec`]) whose other entries are never read; a particle
-    /// outside a task's span would have had zero merged from it, which changes no sum. The blocks' pairs are summed in parallel — several small blocks
-    /// at once, or a large one's runs of groups —, the merges in a fixed order, so that the
-    /// result does not depend on how many blocks went together.
+    /// outside a task's span would have had zero merged from it, which changes no sum.
     ///
     /// A particle's pairs as first partner are consecutive: what `prep` reads of it is read
     /// once for all of them, and its own terms are added up in `acc` and stored once. Its
