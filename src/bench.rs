@@ -213,7 +213,7 @@ impl BenchRun {
         BenchResult {
             particles: p.len(),
             threads,
-            window: format!("{:?}", self.window),
+            window: self.window.label(),
             steps,
             mean_neighbours: 2.0 * per_step_pairs / p.len() as f64,
             seconds_per_step: secs / steps as f64,

@@ -214,13 +214,31 @@ pub struct OutputSection {
     pub lightcurve_interval: Option<f64>,
 }
 
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepSection {
     /// `sweep` (drop pairs as soon as both partners are done) or `full` (keep the whole list,
     /// for memory comparisons).
     #[serde(default)]
     pub window: WindowKind,
+    /// Particles per thread that enter the sweep together (default
+    /// [`crate::sweep::BATCH_PARTICLES_PER_THREAD`] = 1024): the paper's delay, a size vs.
+    /// speed trade-off (`sweep::Window`). Results do not depend on it.
+    #[serde(default = "default_batch_per_thread")]
+    pub batch_per_thread: u64,
+}
+
+impl Default for SweepSection {
+    fn default() -> Self {
+        Self {
+            window: WindowKind::default(),
+            batch_per_thread: default_batch_per_thread(),
+        }
+    }
+}
+
+fn default_batch_per_thread() -> u64 {
+    crate::sweep::BATCH_PARTICLES_PER_THREAD as u64
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -582,6 +600,13 @@ impl Config {
         }
         if let Some(u) = &self.units {
             u.validate().map_err(anyhow::Error::msg)?;
+        }
+        let batch = self.sweep.batch_per_thread;
+        if !(1..=crate::limits::MAX_PARTICLES).contains(&batch) {
+            bail!(
+                "key `sweep.batch_per_thread`: must be between 1 and {}, got {batch}",
+                crate::limits::MAX_PARTICLES
+            );
         }
         if self.output.files_per_snapshot == Some(0) {
             bail!("key `output.files_per_snapshot`: must be ≥ 1, got 0");
@@ -1032,6 +1057,19 @@ mod tests {
         assert!(e.contains("key `sedov.energy` does not apply"), "{e}");
         let e = load(SOD, &["boundary.z=open"]).unwrap_err().to_string();
         assert!(e.contains("boundary.z"), "{e}");
+        for bad in ["0", "4294967296", "-1"] {
+            let e = format!(
+                "{:#}",
+                load(SOD, &[&format!("sweep.batch_per_thread={bad}")]).unwrap_err()
+            );
+            assert!(e.contains("sweep.batch_per_thread"), "{bad}: {e}");
+        }
+        let cfg = load(SOD, &["sweep.batch_per_thread=16384"]).unwrap();
+        assert_eq!(cfg.sweep.batch_per_thread, 16384);
+        assert_eq!(
+            load(SOD, &[]).unwrap().sweep.batch_per_thread,
+            crate::sweep::BATCH_PARTICLES_PER_THREAD as u64
+        );
     }
 
     #[test]

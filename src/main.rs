@@ -127,6 +127,10 @@ enum Command {
         /// `sweep` (the paper's window) or `full` (keep the whole pair list).
         #[arg(long, value_enum, default_value_t = WindowArg::Sweep)]
         window: WindowArg,
+        /// Particles per thread entering the sweep together (`[sweep] batch_per_thread`):
+        /// larger holds more pairs at once and runs fewer parallel regions.
+        #[arg(long, default_value_t = sphdisk::sweep::BATCH_PARTICLES_PER_THREAD as u64)]
+        batch: u64,
         /// Print JSON lines instead of a table.
         #[arg(long)]
         json: bool,
@@ -628,12 +632,19 @@ fn real_main(cli: Cli) -> Result<()> {
             neighbours,
             steps,
             window,
+            batch,
             json,
             csv,
             alternate,
         } => {
             if steps == 0 {
                 anyhow::bail!("--steps: at least 1");
+            }
+            if !(1..=sphdisk::limits::MAX_PARTICLES).contains(&batch) {
+                anyhow::bail!(
+                    "--batch: must be between 1 and {}, got {batch}",
+                    sphdisk::limits::MAX_PARTICLES
+                );
             }
             for &t in &with_threads {
                 sphdisk::limits::check_threads("--with-threads", t, cores)?;
@@ -645,9 +656,10 @@ fn real_main(cli: Cli) -> Result<()> {
             }
             let mut rows: Vec<String> = vec![sphdisk::bench::BenchResult::CSV_HEADER.to_string()];
             let window = match window {
-                WindowArg::Sweep => Window::Sweep,
-                WindowArg::Full => Window::FullList,
-            };
+                WindowArg::Sweep => Window::SWEEP,
+                WindowArg::Full => Window::FULL_LIST,
+            }
+            .with_batch(batch as usize);
             if !json {
                 println!(
                     "{:>9} {:>7} {:>8} {:>6} {:>10} {:>12} {:>12} {:>14} {:>12} {:>12} {:>10}",

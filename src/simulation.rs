@@ -431,9 +431,10 @@ impl<const D: usize> Run<D> {
     fn new(cfg: Config, p: Particles<D>, st: LoopState, bx: SimBox<D>) -> Self {
         let phys = Physics::from_config(&cfg, st.h);
         let window = match cfg.sweep.window {
-            WindowKind::Sweep => Window::Sweep,
-            WindowKind::Full => Window::FullList,
-        };
+            WindowKind::Sweep => Window::SWEEP,
+            WindowKind::Full => Window::FULL_LIST,
+        }
+        .with_batch(cfg.sweep.batch_per_thread as usize);
         let ctl = StepControl {
             courant: cfg.time.courant,
             force: cfg.time.force,

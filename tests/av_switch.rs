@@ -137,13 +137,13 @@ fn sound_wave_loss(av: ArtificialViscosity) -> f64 {
     if let Some(sw) = av.switch() {
         sw.initialise(&mut p);
     }
-    evaluate(&mut p, &bx, &phys, Window::Sweep);
+    evaluate(&mut p, &bx, &phys, Window::SWEEP);
     let start = amplitude(&p);
     let (mut t, end) = (0.0, 3.0);
     let ctl = StepControl::default();
     while t < end {
         let dt = time_step(&p, phys.kernel.h(), &ctl, true).min(end - t);
-        kdk_step(&mut p, &bx, &phys, Window::Sweep, dt);
+        kdk_step(&mut p, &bx, &phys, Window::SWEEP, dt);
         t += dt;
     }
     1.0 - amplitude(&p) / start

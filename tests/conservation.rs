@@ -45,12 +45,12 @@ fn check<const D: usize>(n: usize, h_factor: f64) {
     );
     let ctl = StepControl::default();
     let mut p = turbulent_box::<D>(n, 42);
-    evaluate(&mut p, &bx, &phys, Window::Sweep);
+    evaluate(&mut p, &bx, &phys, Window::SWEEP);
     let start = p.totals(None);
     let mut prev = start;
     for step in 0..20 {
         let dt = time_step(&p, h, &ctl, true);
-        kdk_step(&mut p, &bx, &phys, Window::Sweep, dt);
+        kdk_step(&mut p, &bx, &phys, Window::SWEEP, dt);
         let now = p.totals(None);
         let (dm, dp, de) = now.drift_from(&prev);
         // Momentum: every pair adds +m_i m_j X to one partner and −m_j m_i X to the other,

@@ -12,7 +12,7 @@ use sphdisk::physics::pressure_energy::Scheme;
 use sphdisk::rng::Rng;
 use sphdisk::sweep::local::Local;
 use sphdisk::sweep::reference::{brute_force_pairs, full_list_minimum_image};
-use sphdisk::sweep::{Physics, Window, all_pairs, evaluate};
+use sphdisk::sweep::{BATCH_PARTICLES_PER_THREAD, Physics, Window, all_pairs, evaluate};
 
 /// `n` particles in the unit box: uniform, or (clustered) half of them in two tight blobs.
 fn random_set<const D: usize>(n: usize, clustered: bool, seed: u64) -> Particles<D> {
@@ -136,7 +136,7 @@ fn check_sums_phys<const D: usize>(mut p: Particles<D>, bx: &SimBox<D>, phys: &P
     let phys = *phys;
     let mut reference = p.clone();
     full_list_minimum_image(&mut reference, bx, &phys);
-    let stats = evaluate(&mut p, bx, &phys, Window::Sweep);
+    let stats = evaluate(&mut p, bx, &phys, Window::SWEEP);
     assert!(stats.pairs > 0);
     let tol = 1e-10;
     let dr = rel_max_diff(&p.rho, &reference.rho);
@@ -193,10 +193,10 @@ fn pressure_energy_sums_equal_the_full_pair_list() {
                 &mut a,
                 &unit_box(kinds),
                 &with_scheme(0.04, av, Scheme::PressureEnergy),
-                Window::Sweep,
+                Window::SWEEP,
             );
             let de = with_scheme(0.04, av, Scheme::DensityEnergy);
-            evaluate(&mut b, &unit_box(kinds), &de, Window::Sweep);
+            evaluate(&mut b, &unit_box(kinds), &de, Window::SWEEP);
             assert!(rel_max_diff(&a.p, &b.p) > 0.05);
             // The random velocities' artificial viscosity dominates the accelerations, so
             // they differ less (measured 2.6% and 7.7% of the largest); round-off is 1e-15.
@@ -278,8 +278,8 @@ fn per_particle_alpha_of_the_switch_equals_the_full_pair_list() {
                 ..av
             },
         );
-        evaluate(&mut sw, &bx, &phys_sw, Window::Sweep);
-        evaluate(&mut constant, &bx, &phys_c, Window::Sweep);
+        evaluate(&mut sw, &bx, &phys_sw, Window::SWEEP);
+        evaluate(&mut constant, &bx, &phys_c, Window::SWEEP);
         // α_i averages 0.55 against 1: the viscous heating differs by tens of per cent.
         assert!(rel_max_diff(&sw.diss, &constant.diss) > 0.05);
     }
@@ -327,6 +327,15 @@ fn every_kernel_finds_the_same_pairs_and_sums() {
     }
 }
 
+/// Runs `f` in a pool of two threads (the batch is per thread).
+fn on_two_threads<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 #[test]
 fn full_list_window_gives_identical_results_with_more_memory() {
     let bx = unit_box([BoundaryKind::Periodic; 3]);
@@ -338,15 +347,11 @@ fn full_list_window_gives_identical_results_with_more_memory() {
     // 40 000 particles in 16 slabs: on two threads each slab holds more than a batch of
     // small slabs (`sweep::BATCH_PARTICLES_PER_THREAD` = 1024 per thread), so slabs enter the
     // sweep one at a time, as in any large run.
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .unwrap();
-    pool.install(|| {
+    on_two_threads(|| {
         let mut a = random_set::<3>(40_000, false, 9);
         let mut b = a.clone();
-        let sa = evaluate(&mut a, &bx, &phys, Window::Sweep);
-        let sb = evaluate(&mut b, &bx, &phys, Window::FullList);
+        let sa = evaluate(&mut a, &bx, &phys, Window::SWEEP);
+        let sb = evaluate(&mut b, &bx, &phys, Window::FULL_LIST);
         assert_eq!(a.acc, b.acc);
         assert_eq!(sa.pairs, sb.pairs);
         assert_eq!(sb.peak_pairs as u64, sb.pairs);
@@ -355,6 +360,66 @@ fn full_list_window_gives_identical_results_with_more_memory() {
             "window {} vs full {}",
             sa.peak_pairs,
             sb.peak_pairs
+        );
+    });
+}
+
+/// The batch (`[sweep] batch_per_thread`, the paper's delay) trades memory for fewer parallel
+/// regions and changes no result: one slab at a time, the default, a few slabs at a time and
+/// every slab in one batch give the same accelerations, energies and densities to the bit,
+/// while the window grows with the batch. With a periodic x axis the first slabs wait for the
+/// last, and by a reflecting wall the mirror images wait for their owners: there a block
+/// becomes ready before the block before it, at a point that depends on the batch, and its
+/// terms must still be merged after that block's (a reflecting wall gave 157 accelerations
+/// that differed at round-off, batch 4 096 against 1, when they were merged as they came).
+#[test]
+fn the_batch_changes_the_window_and_no_result() {
+    use BoundaryKind::{Open, Periodic, Reflecting};
+    for kinds in [
+        [Periodic; 3],
+        [Reflecting, Periodic, Periodic],
+        [Open, Reflecting, Periodic],
+    ] {
+        batch_changes_no_result(unit_box(kinds));
+    }
+}
+
+fn batch_changes_no_result(bx: SimBox<3>) {
+    let phys = Physics::hydro(
+        Kernel::<3>::new(0.03),
+        Eos::Ideal { gamma: 5.0 / 3.0 },
+        ArtificialViscosity::default(),
+    );
+    on_two_threads(|| {
+        let base = random_set::<3>(40_000, false, 5);
+        let run = |batch: usize| {
+            let mut p = base.clone();
+            let st = evaluate(&mut p, &bx, &phys, Window::SWEEP.with_batch(batch));
+            (p, st)
+        };
+        let (a, sa) = run(1);
+        let mut peaks = vec![sa.peak_pairs];
+        for batch in [BATCH_PARTICLES_PER_THREAD, 4096, 1 << 30] {
+            let (b, sb) = run(batch);
+            // Compared whole, to the bit (a failure names the field, not 40 000 values).
+            assert!(a.acc == b.acc, "batch {batch}: accelerations differ");
+            assert!(a.du == b.du, "batch {batch}: du/dt differs");
+            assert!(a.rho == b.rho, "batch {batch}: densities differ");
+            assert!(
+                a.vgrad == b.vgrad,
+                "batch {batch}: velocity gradients differ"
+            );
+            assert_eq!(sa.pairs, sb.pairs, "batch {batch}");
+            peaks.push(sb.peak_pairs);
+        }
+        // 40 000 particles in 16 slabs of ~2 500 on two threads: batches of one slab (for 1
+        // and 1 024 per thread: a slab holds more than 2 × 1 024), of four (until they hold
+        // 2 × 4 096), and of all sixteen.
+        assert_eq!(peaks[0], peaks[1], "{peaks:?}");
+        assert!(peaks[1] < peaks[2] && peaks[2] < peaks[3], "{peaks:?}");
+        assert_eq!(
+            peaks[3] as u64, sa.pairs,
+            "one batch holds every pair: {peaks:?}"
         );
     });
 }

@@ -62,13 +62,13 @@ fn shear_wave_decay_rate<const D: usize>(n: usize, h_dx: f64, nu: f64) -> (f64, 
     let bx = periodic_box::<D>();
     let mut phys = Physics::hydro(Kernel::new(h), Eos::Cold {}, ArtificialViscosity::default());
     phys.viscosity = viscous(nu);
-    rhs(&mut p, &bx, &phys, Window::Sweep);
+    rhs(&mut p, &bx, &phys, Window::SWEEP);
     let ctl = StepControl::default();
     let (mut t, t_end) = (0.0, 1.0);
     let mut samples = vec![(0.0, shear_amplitude(&p, k).ln())];
     while t < t_end - 1e-12 {
         let dt = time_step(&p, h, &ctl, false).min(t_end - t);
-        kdk_step(&mut p, &bx, &phys, Window::Sweep, dt);
+        kdk_step(&mut p, &bx, &phys, Window::SWEEP, dt);
         t += dt;
         samples.push((t, shear_amplitude(&p, k).ln()));
     }
@@ -151,7 +151,7 @@ fn check_exact_conservation<const D: usize>(n: usize) {
         bulk: 0.5,
     };
     let mut p = random_box::<D>(n, 5);
-    evaluate(&mut p, &bx, &phys, Window::Sweep);
+    evaluate(&mut p, &bx, &phys, Window::SWEEP);
     // dE/dt = Σ m v·a + Σ m du/dt and dP/dt = Σ m a vanish pair by pair; what remains is
     // rounding, a few ε times the size of the terms.
     let (mut de, mut de_scale) = (0.0, 0.0);
@@ -226,13 +226,13 @@ fn shear_wave_steps(dt: f64) -> (f64, f64, f64, f64) {
         ArtificialViscosity::default(),
     );
     phys.viscosity = viscous(0.01);
-    rhs(&mut p, &bx, &phys, Window::Sweep);
+    rhs(&mut p, &bx, &phys, Window::SWEEP);
     let start = p.totals(None);
     let mut prev = start;
     let (mut wp, mut we): (f64, f64) = (0.0, 0.0);
     let steps = (0.1 / dt).round() as usize;
     for _ in 0..steps {
-        kdk_step(&mut p, &bx, &phys, Window::Sweep, dt);
+        kdk_step(&mut p, &bx, &phys, Window::SWEEP, dt);
         let now = p.totals(None);
         let (_, dp, de) = now.drift_from(&prev);
         wp = wp.max(dp);
@@ -300,7 +300,7 @@ fn alpha_viscosity_matches_full_pair_list() {
     });
     let mut reference = p.clone();
     full_list_minimum_image(&mut reference, &bx, &phys);
-    evaluate(&mut p, &bx, &phys, Window::Sweep);
+    evaluate(&mut p, &bx, &phys, Window::SWEEP);
     for d in 0..2 {
         let s = reference.acc[d].iter().fold(0.0f64, |m, x| m.max(x.abs()));
         for i in 0..p.len() {

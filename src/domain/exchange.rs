@@ -661,7 +661,7 @@ mod tests {
                 .collect();
             let mut mine = p.clone();
             mine.retain(&owners);
-            evaluate(c, &decomp, &mut mine, bx, phys, Window::Sweep);
+            evaluate(c, &decomp, &mut mine, bx, phys, Window::SWEEP);
             mine
         })
     }
@@ -760,7 +760,7 @@ mod tests {
             ..physics::<D>(h)
         };
         let mut solo = p.clone();
-        crate::sweep::evaluate(&mut solo, &bx, &phys, Window::Sweep);
+        crate::sweep::evaluate(&mut solo, &bx, &phys, Window::SWEEP);
         for &nr in ranks {
             assert_same(&solo, &distributed(&p, &bx, &phys, nr));
         }

@@ -346,7 +346,7 @@ fn balance_with_sph_forces<const D: usize>(
 ) {
     let Some(gravity) = cfg.gravity else { return };
     let phys = crate::sweep::Physics::<D>::from_config(cfg, h);
-    let window = crate::sweep::Window::Sweep;
+    let window = crate::sweep::Window::SWEEP;
     let mean = |g: &Group, f: &dyn Fn(usize) -> f64| -> f64 {
         g.members.clone().map(f).sum::<f64>() / g.members.len() as f64
     };

@@ -11,9 +11,11 @@
 //! case.
 //!
 //! Slabs of few particles (a CV disk of a few thousand in a box mostly empty) enter a batch at
-//! a time ([`BATCH_PARTICLES_PER_THREAD`]): their pairs are found in parallel, and the blocks
-//! ready for the same sum are summed together and merged in slab order — the result of one
-//! slab at a time, bit for bit, without leaving all threads but one idle.
+//! a time ([`BATCH_PARTICLES_PER_THREAD`], or [`Window::batch_per_thread`]): their pairs are
+//! found in parallel, and the blocks ready for the same sum are summed together and merged in
+//! slab order — the result of one slab at a time, bit for bit, without leaving all threads
+//! but one idle. A block ready before the block before it has its part over the previous
+//! slab held until that block's own is merged ([`pairs::Held`]), so no batch changes a bit.
 
 pub mod cost;
 pub mod local;
@@ -203,14 +205,55 @@ impl StageTimes {
     }
 }
 
-/// How long the window keeps pairs: `Sweep` drops a slab's pairs once its force sum is done
-/// (the paper's algorithm); `FullList` keeps every pair to the end, the memory behaviour of
-/// a stored full pair list, for comparison.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Window {
-    #[default]
-    Sweep,
-    FullList,
+/// How the window holds pairs. A sweep drops a slab's pairs once its force sum is done
+/// (the paper's algorithm); `full_list` keeps every pair to the end, the memory behaviour of
+/// a stored full pair list, for comparison. `batch_per_thread` is the paper's delay (Section
+/// 2.3: delaying a particle's change of state "increases the size of the interaction list
+/// and thus acts as a tuning parameter for a size vs. speed tradeoff"): slabs enter the
+/// sweep together until they hold this many particles per thread ([`batch_end`]), so that
+/// fewer, larger parallel regions run, at the cost of more pairs held at once. Results do
+/// not depend on it (blocks are summed and merged in slab order whatever the batch).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Window {
+    pub full_list: bool,
+    pub batch_per_thread: usize,
+}
+
+impl Window {
+    /// The paper's window, with the default batch.
+    pub const SWEEP: Self = Self {
+        full_list: false,
+        batch_per_thread: BATCH_PARTICLES_PER_THREAD,
+    };
+    /// Every pair kept to the end of the evaluation.
+    pub const FULL_LIST: Self = Self {
+        full_list: true,
+        batch_per_thread: BATCH_PARTICLES_PER_THREAD,
+    };
+
+    /// `Sweep` or `FullList`, and the batch where it is not the default (`Sweep/16384`).
+    pub fn label(&self) -> String {
+        let kind = if self.full_list { "FullList" } else { "Sweep" };
+        if self.batch_per_thread == BATCH_PARTICLES_PER_THREAD {
+            kind.to_string()
+        } else {
+            format!("{kind}/{}", self.batch_per_thread)
+        }
+    }
+
+    /// This window with slabs entering `per_thread` particles per thread at a time.
+    pub fn with_batch(self, per_thread: usize) -> Self {
+        Self {
+            batch_per_thread: per_thread,
+            ..self
+        }
+    }
+}
+
+impl Default for Window {
+    fn default() -> Self {
+        Self::SWEEP
+    }
 }
 
 /// The three sums, in order. A stage number counts the sums finished.
@@ -362,6 +405,8 @@ pub fn sweep<const D: usize>(
     };
     let lap = |t: &mut f64, since: Instant| *t += since.elapsed().as_secs_f64();
     let mut live_pairs = 0usize;
+    // Block sums' parts waiting for the block before them (`PairBlock::scatter`).
+    let mut held = pairs::Held::default();
 
     let pairs_done = |pair_stage: &[u8], s: usize, k: u8| {
         pair_stage[s] >= k && (s + 1 >= ns || pair_stage[s + 1] >= k)
@@ -377,7 +422,7 @@ pub fn sweep<const D: usize>(
     let mut s = 0;
     loop {
         if s < ns {
-            let end = batch_end(local, s);
+            let end = batch_end(local, s, window.batch_per_thread);
             let c = Instant::now();
             let found: Vec<PairBlock> = (s..end)
                 .into_par_iter()
@@ -392,6 +437,7 @@ pub fn sweep<const D: usize>(
                 local,
                 phys.pressure_energy_gamma().is_some(),
                 &mut work,
+                (&pair_stage, &mut held),
             );
             lap(&mut times.density, c);
             for (t, block) in (s..end).zip(found) {
@@ -429,7 +475,10 @@ pub fn sweep<const D: usize>(
                 }
             }
             // The blocks ready for their next sum (it depends on the slabs' stages only, which
-            // this pass does not change), by sum.
+            // this pass does not change), by sum, in slab order (`pending` is ascending). A
+            // block may become ready before the block before it (whose previous slab waits
+            // for a wall's mirror images or, on a periodic x axis, for the last slab); the
+            // sums still merge every particle's terms in slab order (`PairBlock::scatter`).
             let (mut for_gradient, mut for_force) = (Vec::new(), Vec::new());
             for &t in &pending {
                 let next = pair_stage[t] + 1;
@@ -454,7 +503,7 @@ pub fn sweep<const D: usize>(
                     .map(|&t| blocks[t].as_ref().expect("live block"))
                     .collect();
                 let c = Instant::now();
-                PairBlock::gradient(&refs, local, &mut work);
+                PairBlock::gradient(&refs, local, &mut work, (&pair_stage, &mut held));
                 lap(&mut times.gradient, c);
                 for &t in &for_gradient {
                     pair_stage[t] = GRADIENT;
@@ -467,11 +516,11 @@ pub fn sweep<const D: usize>(
                     .map(|&t| blocks[t].as_ref().expect("live block"))
                     .collect();
                 let c = Instant::now();
-                PairBlock::force(&refs, local, phys, &mut work);
+                PairBlock::force(&refs, local, phys, &mut work, (&pair_stage, &mut held));
                 lap(&mut times.force, c);
                 for &t in &for_force {
                     pair_stage[t] = FORCE;
-                    if window == Window::Sweep {
+                    if !window.full_list {
                         live_pairs -= blocks[t].as_ref().map_or(0, PairBlock::len);
                         blocks[t] = None;
                     }
@@ -507,20 +556,23 @@ pub fn sweep<const D: usize>(
         slab_stage.iter().all(|&s| s == FORCE),
         "sweep left slabs unfinished: a dependency cycle"
     );
+    assert!(held.is_empty(), "sweep left a block's sum unmerged");
     stats.peak_window_bytes = stats.peak_pairs * BYTES_PER_PAIR;
     stats.times = times;
     (work, stats)
 }
 
-/// Slabs enter the sweep together until they hold this many particles per thread: a slab
-/// holding more enters alone, so the window of a large run stays the paper's (a few slabs'
-/// pairs); slabs of few particles — a CV disk of a few thousand, most slabs nearly empty —
-/// enter several at a time, so that every thread has pairs to find and sum.
+/// Slabs enter the sweep together until they hold this many particles per thread (the
+/// default of [`Window::batch_per_thread`], `[sweep] batch_per_thread`): a slab holding more
+/// enters alone, so the window of a large run stays the paper's (a few slabs' pairs); slabs
+/// of few particles — a CV disk of a few thousand, most slabs nearly empty — enter several at
+/// a time, so that every thread has pairs to find and sum.
 pub const BATCH_PARTICLES_PER_THREAD: usize = 1024;
 
-/// The end of the batch of slabs entering the sweep from slab `s`, on this pool's threads.
-fn batch_end<const D: usize>(local: &Local<D>, s: usize) -> usize {
-    let want = BATCH_PARTICLES_PER_THREAD * rayon::current_num_threads().max(1);
+/// The end of the batch of slabs entering the sweep from slab `s`, `per_thread` particles
+/// for each of this pool's threads.
+fn batch_end<const D: usize>(local: &Local<D>, s: usize, per_thread: usize) -> usize {
+    let want = per_thread.saturating_mul(rayon::current_num_threads().max(1));
     batch_of(|t| local.slab_range(t).len(), local.num_slabs(), s, want)
 }
 

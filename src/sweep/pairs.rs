@@ -294,6 +294,34 @@ impl<const D: usize> Accumulator for ForceSum<D> {
     }
 }
 
+/// Parts of a sum held back (`PairBlock::scatter`): a block that had a sum before the block
+/// before it keeps its buffers' part over the previous slab here until that block has
+/// merged its own terms, by sum and slab.
+#[derive(Default)]
+pub struct Held {
+    parts: Vec<(u8, usize, Box<dyn std::any::Any + Send>)>,
+}
+
+impl Held {
+    /// Nothing held (every block's part merged).
+    pub fn is_empty(&self) -> bool {
+        self.parts.is_empty()
+    }
+
+    fn put<A: Send + 'static>(&mut self, sum: u8, slab: usize, bufs: Vec<(Vec<A>, Span)>) {
+        self.parts.push((sum, slab, Box::new(bufs)));
+    }
+
+    fn take<A: 'static>(&mut self, sum: u8, slab: usize) -> Option<Vec<(Vec<A>, Span)>> {
+        let k = self
+            .parts
+            .iter()
+            .position(|(s, t, _)| *s == sum && *t == slab)?;
+        let (_, _, b) = self.parts.swap_remove(k);
+        Some(*b.downcast().expect("held parts of this sum's type"))
+    }
+}
+
 impl PairBlock {
     /// Finds every pair with first partner in slab `slab` and the second in the same cell
     /// (lower index), a lower neighbour cell of the same slab, or the previous slab.
@@ -426,10 +454,13 @@ impl PairBlock {
 
     /// Runs `f` on every pair of every block in `blocks`, each task adding the two partners'
     /// contributions into its own buffer (no write conflicts, streaming access), then merges
-    /// the buffers into `work` with `merge`, block after block in the order given. The
-    /// blocks' pairs are summed in parallel — several small blocks at once, or a large one's
-    /// runs of groups —, the merges in a fixed order, so that the result does not depend on
-    /// how many blocks went together. A task clears and merges only the particles its pairs
+    /// the buffers into `work` with `merge`, block after block in the order given (slab
+    /// order). The blocks' pairs are summed in parallel — several small blocks at once, or a
+    /// large one's runs of groups —, the merges in a fixed order: every particle has its own
+    /// block's terms merged before the next block's, even where the next block ran first
+    /// (its part over this slab waits in `held`), so that the result depends neither on how
+    /// many blocks went together nor on which became ready first. `sum` is this sum's
+    /// stage; `pair_stage` tells which blocks had it in earlier calls. A task clears and merges only the particles its pairs
     /// touch ([`Span`]: on two threads its half of the slab and the part of the previous
     /// slab next to it, about half the block), in a buffer kept between sums
     /// ([`crate::memory::scratch_vec`]) whose other entries are never read; a particle
@@ -443,6 +474,7 @@ impl PairBlock {
     fn scatter<const D: usize, S, A, P, F, M>(
         blocks: &[&PairBlock],
         work: &mut [Work<D>],
+        (sum, pair_stage, held): (u8, &[u8], &mut Held),
         prep: P,
         f: F,
         merge: M,
@@ -494,24 +526,51 @@ impl PairBlock {
                 .map(|b| partial(b))
                 .collect(),
         };
-        for (b, bufs) in blocks.iter().zip(&partials) {
-            if bufs.is_empty() {
-                continue;
-            }
-            work[b.j_start..b.i_end]
-                .par_iter_mut()
-                .enumerate()
-                .with_min_len(1024)
-                .for_each(|(o, wk)| {
-                    for (buf, span) in bufs {
-                        if span.covers(o) {
-                            merge(wk, &buf[o]);
+        // Merged block after block: a block's own slab, and the previous slab where the
+        // block before it has had this sum (earlier, or earlier in this call); otherwise
+        // that part is held until it has, and merged after it (`Held`).
+        let mut merged_now: Option<usize> = None;
+        for (b, bufs) in blocks.iter().zip(partials) {
+            let prev_ready = b.j_start == b.i_start
+                || pair_stage[b.slab - 1] >= sum
+                || merged_now == Some(b.slab - 1);
+            let next: Vec<(Vec<A>, Span)> = held.take(sum, b.slab + 1).unwrap_or_default();
+            let lo = if prev_ready { b.j_start } else { b.i_start };
+            if !bufs.is_empty() || !next.is_empty() {
+                let (bufs, next) = (&bufs, &next);
+                work[lo..b.i_end]
+                    .par_iter_mut()
+                    .enumerate()
+                    .with_min_len(1024)
+                    .for_each(|(k, wk)| {
+                        let o = lo + k - b.j_start;
+                        for (buf, span) in bufs {
+                            if span.covers(o) {
+                                merge(wk, &buf[o]);
+                            }
                         }
-                    }
-                });
-        }
-        for (buf, _) in partials.into_iter().flatten() {
-            crate::memory::keep_scratch(buf);
+                        // The next block's part over this slab, held since it ran: its
+                        // offsets count from this slab's start.
+                        if let Some(o) = (lo + k).checked_sub(b.i_start) {
+                            for (buf, span) in next {
+                                if span.covers(o) {
+                                    merge(wk, &buf[o]);
+                                }
+                            }
+                        }
+                    });
+            }
+            for (buf, _) in next {
+                crate::memory::keep_scratch(buf);
+            }
+            if prev_ready || bufs.is_empty() {
+                for (buf, _) in bufs {
+                    crate::memory::keep_scratch(buf);
+                }
+            } else {
+                held.put(sum, b.slab, bufs);
+            }
+            merged_now = Some(b.slab);
         }
     }
 
@@ -522,13 +581,16 @@ impl PairBlock {
         local: &Local<D>,
         pressure_energy: bool,
         work: &mut [Work<D>],
+        (pair_stage, held): (&[u8], &mut Held),
     ) {
+        let order = (crate::sweep::DENSITY, pair_stage, held);
         let m = &local.mass;
         if pressure_energy {
             let u = &local.u;
             Self::scatter(
                 blocks,
                 work,
+                order,
                 |i| (m[i], u[i]),
                 |&(m_i, u_i), p| {
                     let j = p.j as usize;
@@ -557,6 +619,7 @@ impl PairBlock {
         Self::scatter(
             blocks,
             work,
+            order,
             |i| m[i],
             |&m_i, p| ((m[p.j as usize] * p.w, 1u32), (m_i * p.w, 1u32)),
             |wk, a: &(f64, u32)| {
@@ -567,10 +630,16 @@ impl PairBlock {
     }
 
     /// Second sum, Eq. (10): the velocity gradient, needing every partner's density.
-    pub fn gradient<const D: usize>(blocks: &[&PairBlock], local: &Local<D>, work: &mut [Work<D>]) {
+    pub fn gradient<const D: usize>(
+        blocks: &[&PairBlock],
+        local: &Local<D>,
+        work: &mut [Work<D>],
+        (pair_stage, held): (&[u8], &mut Held),
+    ) {
         Self::scatter(
             blocks,
             work,
+            (crate::sweep::GRADIENT, pair_stage, held),
             |i| {
                 let x: [f64; D] = std::array::from_fn(|d| local.pos[d][i]);
                 (x, local.velocity(i), local.mass[i] / local.rho[i])
@@ -595,14 +664,16 @@ impl PairBlock {
         local: &Local<D>,
         phys: &Physics<D>,
         work: &mut [Work<D>],
+        order: (&[u8], &mut Held),
     ) {
         let orbital = !local.v_av.is_empty();
-        match (phys.pair_terms().viscous, orbital) {
-            (true, true) => Self::force_with::<D, true, true>(blocks, local, phys, work),
-            (true, false) => Self::force_with::<D, true, false>(blocks, local, phys, work),
-            (false, true) => Self::force_with::<D, false, true>(blocks, local, phys, work),
-            (false, false) => Self::force_with::<D, false, false>(blocks, local, phys, work),
-        }
+        let f = match (phys.pair_terms().viscous, orbital) {
+            (true, true) => Self::force_with::<D, true, true>,
+            (true, false) => Self::force_with::<D, true, false>,
+            (false, true) => Self::force_with::<D, false, true>,
+            (false, false) => Self::force_with::<D, false, false>,
+        };
+        f(blocks, local, phys, work, order)
     }
 
     /// The force sum compiled with and without the physical viscosity (without it no
@@ -614,6 +685,7 @@ impl PairBlock {
         local: &Local<D>,
         phys: &Physics<D>,
         work: &mut [Work<D>],
+        (pair_stage, held): (&[u8], &mut Held),
     ) {
         let terms = PairTerms {
             viscous: VISCOUS,
@@ -655,6 +727,7 @@ impl PairBlock {
         Self::scatter(
             blocks,
             work,
+            (crate::sweep::FORCE, pair_stage, held),
             |i| {
                 let x: [f64; D] = std::array::from_fn(|d| local.pos[d][i]);
                 (x, side(i), m[i])
@@ -823,7 +896,7 @@ mod tests {
         let run = || {
             let mut p = p0.clone();
             pool.install(|| {
-                crate::sweep::evaluate(&mut p, &bx, &phys, crate::sweep::Window::Sweep)
+                crate::sweep::evaluate(&mut p, &bx, &phys, crate::sweep::Window::SWEEP)
             });
             p
         };
