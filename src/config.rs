@@ -601,13 +601,7 @@ impl Config {
         if let Some(u) = &self.units {
             u.validate().map_err(anyhow::Error::msg)?;
         }
-        let batch = self.sweep.batch_per_thread;
-        if !(1..=crate::limits::MAX_PARTICLES).contains(&batch) {
-            bail!(
-                "key `sweep.batch_per_thread`: must be between 1 and {}, got {batch}",
-                crate::limits::MAX_PARTICLES
-            );
-        }
+        crate::limits::check_batch("key `sweep.batch_per_thread`", self.sweep.batch_per_thread)?;
         if self.output.files_per_snapshot == Some(0) {
             bail!("key `output.files_per_snapshot`: must be ≥ 1, got 0");
         }

@@ -1,7 +1,7 @@
 //! Bounds on what a run may ask for, derived before anything is allocated: particles
 //! (indexed by 32-bit numbers in the neighbour grid), cells of the neighbour grid (from the
-//! box and h, in checked 64-bit arithmetic), snapshots per run, files per snapshot and
-//! worker threads. Each refusal is one line naming the key to change.
+//! box and h, in checked 64-bit arithmetic), snapshots per run, files per snapshot, worker
+//! threads and the sweep's batch. Each refusal is one line naming the key to change.
 
 use anyhow::{Result, bail};
 
@@ -183,6 +183,16 @@ pub fn check_snapshot_count(interval: f64, t_end: f64) -> Result<u64> {
 pub fn check_files_per_snapshot(files: usize) -> Result<()> {
     if files > MAX_FILES_PER_SNAPSHOT {
         bail!("key `output.files_per_snapshot`: at most {MAX_FILES_PER_SNAPSHOT}, got {files}");
+    }
+    Ok(())
+}
+
+/// Refuses a batch of the sweep (`sweep::Window::batch_per_thread`) of no particles or of
+/// more than a run may hold ([`MAX_PARTICLES`]), naming `what` asked for it (the key
+/// `sweep.batch_per_thread` or the option `--batch`).
+pub fn check_batch(what: &str, batch: u64) -> Result<()> {
+    if !(1..=MAX_PARTICLES).contains(&batch) {
+        bail!("{what}: must be between 1 and {MAX_PARTICLES}, got {batch}");
     }
     Ok(())
 }

@@ -640,12 +640,7 @@ fn real_main(cli: Cli) -> Result<()> {
             if steps == 0 {
                 anyhow::bail!("--steps: at least 1");
             }
-            if !(1..=sphdisk::limits::MAX_PARTICLES).contains(&batch) {
-                anyhow::bail!(
-                    "--batch: must be between 1 and {}, got {batch}",
-                    sphdisk::limits::MAX_PARTICLES
-                );
-            }
+            sphdisk::limits::check_batch("--batch", batch)?;
             for &t in &with_threads {
                 sphdisk::limits::check_threads("--with-threads", t, cores)?;
             }
