@@ -5,7 +5,10 @@
 //! efficiency over one thread, and the floating-point operations and bytes moved per pair
 //! of each loop ([`crate::sweep::cost`]). The thread counts run one after another, or
 //! stepped in turn on a particle set each ([`run_alternating`]): on a shared machine whose
-//! speed drifts, their ratio is then measured in one period.
+//! speed drifts, their ratio is then measured in one period. Stepping in turn, each turn
+//! takes an untimed step before its timed one, so that the timed step follows a step on
+//! the same particles, as in a run (a step right after the other set's starts with caches
+//! that set filled: at 10⁵ particles that cost two threads about 15% and one thread 2%).
 
 use std::time::Instant;
 
@@ -32,6 +35,9 @@ pub struct BenchResult {
     pub threads: usize,
     pub window: String,
     pub steps: usize,
+    /// Steps taken on this run's particles and not timed: one before each timed step when
+    /// the thread counts step in turn ([`run_alternating`]), else none.
+    pub untimed_steps: usize,
     pub mean_neighbours: f64,
     pub seconds_per_step: f64,
     pub particle_updates_per_second: f64,
@@ -70,14 +76,14 @@ impl BenchResult {
     }
 
     /// The header of [`BenchResult::csv_row`].
-    pub const CSV_HEADER: &'static str = "particles,threads,window,mean_neighbours,seconds_per_step,particle_updates_per_second,pairs_per_second,pairs_per_second_per_core,speedup,parallel_efficiency,build,find_pairs,density,gradient,force,finish,outside_sweep,peak_window_bytes,peak_rss_bytes,candidates_per_pair,cells_per_pair,flops_per_pair,bytes_per_pair";
+    pub const CSV_HEADER: &'static str = "particles,threads,window,mean_neighbours,seconds_per_step,particle_updates_per_second,pairs_per_second,pairs_per_second_per_core,speedup,parallel_efficiency,build,find_pairs,density,gradient,force,finish,outside_sweep,peak_window_bytes,peak_rss_bytes,candidates_per_pair,cells_per_pair,flops_per_pair,bytes_per_pair,untimed_steps";
 
     /// One CSV row (times in seconds per step; an empty speedup where none was measured).
     pub fn csv_row(&self) -> String {
         let opt = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6}"));
         let t = &self.times_per_step;
         format!(
-            "{},{},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.4},{:.4},{:.3},{:.3}",
+            "{},{},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{:.4},{:.4},{:.3},{:.3},{}",
             self.particles,
             self.threads,
             self.window,
@@ -100,7 +106,8 @@ impl BenchResult {
             self.candidates_per_pair,
             self.cells_per_pair,
             self.flops_per_pair,
-            self.bytes_per_pair
+            self.bytes_per_pair,
+            self.untimed_steps
         )
     }
 }
@@ -145,6 +152,8 @@ pub struct BenchRun {
     /// The pool's threads (set-up, steps and the closing count run on one pool).
     threads: usize,
     steps: usize,
+    /// Steps taken and not counted ([`BenchRun::untimed_step`]).
+    untimed: usize,
     /// Seconds of the steps (their own time: another run's steps in between not counted).
     secs: f64,
     pairs: u64,
@@ -173,6 +182,7 @@ impl BenchRun {
             window,
             threads: rayon::current_num_threads(),
             steps: 0,
+            untimed: 0,
             secs: 0.0,
             pairs: 0,
             peak: warm.peak_pairs,
@@ -184,14 +194,25 @@ impl BenchRun {
     /// One KDK step, timed.
     pub fn step(&mut self) {
         let start = Instant::now();
-        let dt = time_step(&self.p, self.h, &self.ctl, true);
-        let s = kdk_step(&mut self.p, &self.bx, &self.phys, self.window, dt);
+        let s = self.advance();
         self.secs += start.elapsed().as_secs_f64();
         self.steps += 1;
         self.pairs += s.pairs;
         self.last_pairs = s.pairs;
         self.peak = self.peak.max(s.peak_pairs);
         self.times.add(&s.times);
+    }
+
+    /// One KDK step, neither timed nor counted: it brings this run's particles back into
+    /// the caches after another run's steps.
+    pub fn untimed_step(&mut self) {
+        self.advance();
+        self.untimed += 1;
+    }
+
+    fn advance(&mut self) -> crate::sweep::SweepStats {
+        let dt = time_step(&self.p, self.h, &self.ctl, true);
+        kdk_step(&mut self.p, &self.bx, &self.phys, self.window, dt)
     }
 
     /// The figures of the steps taken (at least one). The peak resident memory is the
@@ -215,6 +236,7 @@ impl BenchRun {
             threads,
             window: self.window.label(),
             steps,
+            untimed_steps: self.untimed,
             mean_neighbours: 2.0 * per_step_pairs / p.len() as f64,
             seconds_per_step: secs / steps as f64,
             particle_updates_per_second: p.len() as f64 * steps as f64 / secs,
@@ -248,8 +270,10 @@ pub fn run_one(n: usize, neighbours: f64, steps: usize, window: Window) -> Resul
 
 /// One run per pool, on a particle set of its own, stepped in turn — a step on each pool,
 /// then the next step on each —, so that a machine whose speed drifts (a shared one) slows
-/// them alike and their ratio is measured in one period. Each step starts with caches
-/// that the other runs' steps have filled; the results come in the pools' order.
+/// them alike and their ratio is measured in one period. Each turn is an untimed step, then
+/// the timed one: the timed step follows a step on its own particles, as in a run, not the
+/// other runs' steps, whose particles fill the caches. The results come in the pools'
+/// order.
 pub fn run_alternating(
     n: usize,
     neighbours: f64,
@@ -263,7 +287,10 @@ pub fn run_alternating(
         .collect::<Result<Vec<_>>>()?;
     for _ in 0..steps {
         for (pool, run) in pools.iter().zip(&mut runs) {
-            pool.install(|| run.step());
+            pool.install(|| {
+                run.untimed_step();
+                run.step();
+            });
         }
     }
     Ok(pools

@@ -137,8 +137,10 @@ enum Command {
         /// Also write every row to this CSV file (for plotting).
         #[arg(long)]
         csv: Option<PathBuf>,
-        /// Step the thread counts in turn, a step each, on a particle set each (a machine
-        /// whose speed drifts then slows them alike: the speed-up is measured in one period).
+        /// Step the thread counts in turn, on a particle set each (a machine whose speed
+        /// drifts then slows them alike: the speed-up is measured in one period); each turn
+        /// is an untimed step, then the timed one, so that the timed step finds its own
+        /// particles in the caches, as in a run.
         #[arg(long)]
         alternate: bool,
     },
@@ -226,6 +228,16 @@ enum WindowArg {
     Full,
 }
 
+/// A line on stderr (a run's terminal report, an error), written best-effort: a reader
+/// that has quit (`sphdisk run … 2>&1 | head`) must not turn a finished run, its files
+/// written, into a panic.
+macro_rules! report {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 fn main() -> ExitCode {
     sphdisk::memory::keep_freed_memory();
     let cli = match Cli::try_parse() {
@@ -250,7 +262,7 @@ fn main() -> ExitCode {
     match real_main(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            report!("error: {e:#}");
             ExitCode::from(2)
         }
     }
@@ -274,7 +286,7 @@ fn report_run(ended: &Ended, out: &std::path::Path) {
         // Other ranks of a distributed run: rank 0 reports.
         Ended::Helped => return,
         Ended::Finished(s) => {
-            eprintln!(
+            report!(
                 "{}: {} particles, {}D, {} steps to t = {} in {:.2} s ({:.3e} particle updates/s, {} threads)",
                 s.problem,
                 s.particles,
@@ -286,7 +298,7 @@ fn report_run(ended: &Ended, out: &std::path::Path) {
                 s.threads
             );
             for (k, v) in &s.errors {
-                eprintln!("  {k} = {v:.6e}");
+                report!("  {k} = {v:.6e}");
             }
         }
         Ended::Stopped {
@@ -298,14 +310,14 @@ fn report_run(ended: &Ended, out: &std::path::Path) {
             let by = signal.map_or(String::new(), |s| {
                 format!(" by {}", sphdisk::signals::name(s))
             });
-            eprintln!(
+            report!(
                 "stopped{by} after step {step} at t = {time}; checkpoint {}",
                 checkpoint.display()
             );
-            eprintln!("  continue with: sphdisk run --resume {}", out.display());
+            report!("  continue with: sphdisk run --resume {}", out.display());
         }
     }
-    eprintln!("  outputs in {}", out.display());
+    report!("  outputs in {}", out.display());
 }
 
 /// What `sphdisk run` was asked to do.
@@ -356,6 +368,9 @@ fn execute_mpi(job: &Job) -> Option<Result<Ended>> {
 }
 
 fn real_main(cli: Cli) -> Result<()> {
+    if !matches!(cli.command, Command::Run { .. }) {
+        sphdisk::signals::end_quietly_when_the_reader_quits();
+    }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     if let Some(t) = cli.threads {
         sphdisk::limits::check_threads("--threads", t, cores)?;

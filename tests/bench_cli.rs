@@ -60,6 +60,8 @@ fn bench_writes_a_consistent_csv_of_thread_scaling() {
         .sum();
         let step = f("seconds_per_step");
         assert!((parts - step).abs() <= 1e-5 * step, "{parts} vs {step}");
+        // Run one after another, every step is timed.
+        assert_eq!(col(row, "untimed_steps"), "0");
         assert!(f("pairs_per_second_per_core") * f("threads") <= f("pairs_per_second") * 1.000001);
         // Bytes moved per pair (sphdisk::sweep::cost): the three sums' fixed 528 B (72 + 240
         // + 216: the record, the second partner's fields and accumulator), and pair
@@ -114,6 +116,9 @@ fn bench_alternate_steps_the_thread_counts_in_turn() {
     assert_eq!(f(&rows[1], "threads"), 2.0);
     for r in &rows {
         assert_eq!(f(r, "steps"), 2.0);
+        // Each turn an untimed step first, on the run's own particles, so that the timed
+        // one does not start with caches the other set filled.
+        assert_eq!(f(r, "untimed_steps"), 2.0);
         assert_eq!(f(r, "particles"), f(&rows[0], "particles"));
     }
     // The two sets start alike and differ after two steps only in the last bits of the
