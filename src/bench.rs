@@ -112,6 +112,64 @@ impl BenchResult {
     }
 }
 
+/// Particles along each axis of the lattice [`uniform_box`] builds for about `n`: ∛n
+/// rounded, at least 2.
+pub fn lattice_side(n: usize) -> u64 {
+    (n as f64).cbrt().round().max(2.0) as u64
+}
+
+/// Refuses, before anything is allocated, a benchmark that cannot be measured: no particles,
+/// or more than a run may hold or this machine's memory holds (`--n`); a mean neighbour
+/// count that is not a number of at least one, or so large that the kernel's support
+/// would reach beyond half the periodic unit box (each particle would meet its own
+/// images: (4π/3)(1/2)³ = π/6 of the particles) or that the pairs the window holds would
+/// not fit in memory (`--neighbours`).
+pub fn check_options(n: &[usize], neighbours: f64, window: Window) -> Result<()> {
+    use crate::limits::{MAX_PARTICLES, check_memory, memory_available};
+    if !(neighbours.is_finite() && neighbours >= 1.0) {
+        anyhow::bail!("--neighbours: a mean of at least 1 neighbour, got {neighbours}");
+    }
+    for &np in n {
+        if np == 0 {
+            anyhow::bail!("--n: at least 1 particle, got 0");
+        }
+        let k = lattice_side(np);
+        let Some(total) = k.checked_pow(3).filter(|&t| t <= MAX_PARTICLES) else {
+            anyhow::bail!(
+                "--n {np}: a lattice of {k}³ particles is more than the {MAX_PARTICLES} a run can hold"
+            );
+        };
+        check_memory::<3>(total, "--n")?;
+        let most = std::f64::consts::PI / 6.0 * total as f64;
+        if neighbours > most {
+            anyhow::bail!(
+                "--neighbours {neighbours}: at most {most:.0} for {total} particles (--n {np}): the kernel's support would reach beyond half the periodic box"
+            );
+        }
+        // The window: every pair with a full list; else about three slabs' pairs (a slab
+        // is one support wide), the paper's window.
+        let support = (neighbours * 3.0 / (4.0 * std::f64::consts::PI * total as f64)).cbrt();
+        let share = if window.full_list {
+            1.0
+        } else {
+            (3.0 * support).min(1.0)
+        };
+        let bytes =
+            total as f64 * neighbours / 2.0 * crate::sweep::pairs::BYTES_PER_PAIR as f64 * share;
+        if let Some(available) = memory_available()? {
+            let need = bytes + (total * crate::limits::bytes_per_particle::<3>()) as f64;
+            if need > available as f64 {
+                anyhow::bail!(
+                    "--neighbours {neighbours}: {total} particles and their pairs need about {:.2} GiB, more than the {:.2} GiB available: lower --neighbours or --n",
+                    need / (1u64 << 30) as f64,
+                    available as f64 / (1u64 << 30) as f64
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
 /// A jittered cubic lattice of about `n` particles in the unit periodic box, with h set for
 /// about `neighbours` partners within the support: (4π/3)(2h)³ n = neighbours.
 pub fn uniform_box(
@@ -119,7 +177,7 @@ pub fn uniform_box(
     neighbours: f64,
     seed: u64,
 ) -> anyhow::Result<(Particles<3>, SimBox<3>, f64)> {
-    let k = (n as f64).cbrt().round().max(2.0) as usize;
+    let k = lattice_side(n) as usize;
     let dx = 1.0 / k as f64;
     let mut rng = Rng::new(seed);
     let mut p = Particles::new();

@@ -95,7 +95,8 @@ fn parse_bytes(text: &str) -> Option<u64> {
 }
 
 /// Refuses `particles` particles of a `D`-dimensional run when their estimated memory
-/// ([`bytes_per_particle`]) exceeds [`memory_available`], naming `key` and both figures.
+/// ([`bytes_per_particle`]) exceeds [`memory_available`], naming `key` (a problem file's
+/// key, or a command-line option such as `--n`) and both figures.
 pub fn check_memory<const D: usize>(particles: u64, key: &str) -> Result<()> {
     let Some(available) = memory_available()? else {
         return Ok(());
@@ -103,8 +104,13 @@ pub fn check_memory<const D: usize>(particles: u64, key: &str) -> Result<()> {
     let need = particles.saturating_mul(bytes_per_particle::<D>());
     if need > available {
         let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+        let named = if key.starts_with("--") {
+            key.to_string()
+        } else {
+            format!("key `{key}`")
+        };
         bail!(
-            "key `{key}`: {particles} particles need about {:.2} GiB, more than the {:.2} GiB available (MemAvailable; set {MEMORY_LIMIT_VAR} to change): lower {key}",
+            "{named}: {particles} particles need about {:.2} GiB, more than the {:.2} GiB available (MemAvailable; set {MEMORY_LIMIT_VAR} to change): lower {key}",
             gib(need),
             gib(available)
         );

@@ -659,17 +659,18 @@ fn real_main(cli: Cli) -> Result<()> {
             for &t in &with_threads {
                 sphdisk::limits::check_threads("--with-threads", t, cores)?;
             }
+            let window = match window {
+                WindowArg::Sweep => Window::SWEEP,
+                WindowArg::Full => Window::FULL_LIST,
+            }
+            .with_batch(batch as usize);
+            sphdisk::bench::check_options(&n, neighbours, window)?;
             if let Some(path) = &csv {
                 // Refuse an unwritable path before the measurements, not after.
                 std::fs::write(path, "")
                     .with_context(|| format!("--csv: cannot write {}", path.display()))?;
             }
             let mut rows: Vec<String> = vec![sphdisk::bench::BenchResult::CSV_HEADER.to_string()];
-            let window = match window {
-                WindowArg::Sweep => Window::SWEEP,
-                WindowArg::Full => Window::FULL_LIST,
-            }
-            .with_batch(batch as usize);
             if !json {
                 println!(
                     "{:>9} {:>7} {:>8} {:>6} {:>10} {:>12} {:>12} {:>14} {:>12} {:>12} {:>10}",

@@ -148,3 +148,77 @@ fn bench_alternate_steps_the_thread_counts_in_turn() {
         "{err}"
     );
 }
+
+/// A size or neighbour count the benchmark cannot measure is refused in one line naming the
+/// option, before anything is allocated or printed: no particles; more than a run holds, or
+/// than this machine's memory; not a number of at least one neighbour; a support reaching
+/// beyond half the periodic box (π/6 of the particles: 524 of 1 000); pairs beyond memory.
+/// Before, `--n 0` measured 8 particles, `--neighbours 0` spent seconds finding no pairs,
+/// `nan` and `inf` ran, `1e9` counted every particle's 27 images, and a lattice too large
+/// was refused naming the problem files' key `particles.n`.
+#[test]
+fn absurd_sizes_and_neighbour_counts_are_refused_naming_the_option() {
+    let cases: [(&[&str], &str); 10] = [
+        (&["--n", "0"], "--n"),
+        (&["--n", "5000000000"], "--n"),
+        (&["--n", "3000000000"], "--n"),
+        (&["--neighbours", "0"], "--neighbours"),
+        (&["--neighbours=-5"], "--neighbours"),
+        (&["--neighbours", "nan"], "--neighbours"),
+        (&["--neighbours", "inf"], "--neighbours"),
+        (&["--n", "1000", "--neighbours", "1e9"], "--neighbours"),
+        (&["--n", "1000", "--neighbours", "525"], "--neighbours"),
+        (
+            &["--n", "1000000", "--neighbours", "500000"],
+            "--neighbours",
+        ),
+    ];
+    for (args, option) in cases {
+        let mut all = vec!["bench"];
+        all.extend_from_slice(args);
+        // Memory measured against a fixed limit, whatever this machine has free.
+        let (code, out, err) = sphdisk_cli_with_memory(&all, "16G");
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(out.is_empty(), "{args:?} printed before refusing: {out}");
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 1, "{args:?}: {err}");
+        assert!(
+            lines[0].starts_with(&format!("error: {option}")),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("particles.n"), "{args:?}: {err}");
+    }
+    // The largest support that stays within half the box is measured.
+    let (code, out, err) = sphdisk_cli_with_memory(
+        &[
+            "bench",
+            "--n",
+            "1000",
+            "--neighbours",
+            "500",
+            "--steps",
+            "1",
+            "--with-threads",
+            "1",
+            "--json",
+        ],
+        "16G",
+    );
+    assert_eq!(code, 0, "{err}");
+    let row: serde_json::Value = serde_json::from_str(out.lines().next().unwrap()).unwrap();
+    assert_eq!(row["particles"].as_f64(), Some(1000.0));
+}
+
+/// `sphdisk args…` with `SPHDISK_MEMORY_LIMIT` set: (status, stdout, stderr).
+fn sphdisk_cli_with_memory(args: &[&str], limit: &str) -> (i32, String, String) {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sphdisk"))
+        .args(args)
+        .env("SPHDISK_MEMORY_LIMIT", limit)
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
