@@ -107,6 +107,7 @@ pub fn run_report(opts: &ReportOptions) -> Result<Vec<ReportRow>> {
     if opts.regions.is_empty() || opts.regions.contains(&0) {
         bail!("decompose: region counts must be at least 1");
     }
+    check_sizes(opts)?;
     let mut samples = Vec::new();
     if opts.disk_particles > 0 {
         let pos = keplerian_disk(opts.disk_particles, 1);
@@ -153,6 +154,36 @@ pub fn run_report(opts: &ReportOptions) -> Result<Vec<ReportRow>> {
         }
     }
     Ok(rows)
+}
+
+/// Refuses, before anything is allocated, a sample of more particles than a run may hold or
+/// this machine's memory holds, and more regions than a sample has particles (a region
+/// would hold none), naming the option.
+fn check_sizes(opts: &ReportOptions) -> Result<()> {
+    use crate::limits::{MAX_PARTICLES, check_memory};
+    let samples = [
+        ("--disk-particles", opts.disk_particles, 2),
+        ("--cluster-particles", opts.cluster_particles, 3),
+    ];
+    for (option, n, dim) in samples {
+        if n == 0 {
+            continue;
+        }
+        if n as u64 > MAX_PARTICLES {
+            bail!("{option}: {n} is more than the {MAX_PARTICLES} particles a run can hold");
+        }
+        if dim == 2 {
+            check_memory::<2>(n as u64, option)?;
+        } else {
+            check_memory::<3>(n as u64, option)?;
+        }
+        if let Some(&r) = opts.regions.iter().find(|&&r| r > n) {
+            bail!(
+                "--regions {r}: more regions than the {n} particles of {option} (a region would hold none)"
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Moves of the cuts by measured one-sided pair counts after the interaction balance.
@@ -642,5 +673,27 @@ mod tests {
             })
             .is_err()
         );
+    }
+
+    /// Sizes that cannot be decomposed are refused naming the option, before a particle is
+    /// placed (before, 10¹¹ disk particles aborted on a failed allocation, and 10⁸ regions
+    /// of 200 000 particles ran for minutes).
+    #[test]
+    fn absurd_sizes_are_refused_naming_the_option() {
+        let refused = |regions: Vec<usize>, disk: usize, cluster: usize, option: &str| {
+            let e = run_report(&ReportOptions {
+                regions,
+                disk_particles: disk,
+                cluster_particles: cluster,
+                json: true,
+            })
+            .unwrap_err()
+            .to_string();
+            assert!(e.starts_with(option), "{e}");
+        };
+        refused(vec![4], 100_000_000_000, 0, "--disk-particles");
+        refused(vec![4], 0, 100_000_000_000, "--cluster-particles");
+        refused(vec![100_000_000], 200_000, 0, "--regions");
+        refused(vec![15, 1000], 0, 500, "--regions");
     }
 }
