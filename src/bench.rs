@@ -160,9 +160,9 @@ pub fn check_options(n: &[usize], neighbours: f64, window: Window) -> Result<()>
             let need = bytes + (total * crate::limits::bytes_per_particle::<3>()) as f64;
             if need > available as f64 {
                 anyhow::bail!(
-                    "--neighbours {neighbours}: {total} particles and their pairs need about {:.2} GiB, more than the {:.2} GiB available: lower --neighbours or --n",
-                    need / (1u64 << 30) as f64,
-                    available as f64 / (1u64 << 30) as f64
+                    "--neighbours {neighbours}: {total} particles and their pairs need about {}, more than {}: lower --neighbours or --n",
+                    crate::limits::size_text(need),
+                    crate::limits::memory_source(available)
                 );
             }
         }

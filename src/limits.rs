@@ -103,19 +103,39 @@ pub fn check_memory<const D: usize>(particles: u64, key: &str) -> Result<()> {
     };
     let need = particles.saturating_mul(bytes_per_particle::<D>());
     if need > available {
-        let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
         let named = if key.starts_with("--") {
             key.to_string()
         } else {
             format!("key `{key}`")
         };
         bail!(
-            "{named}: {particles} particles need about {:.2} GiB, more than the {:.2} GiB available (MemAvailable; set {MEMORY_LIMIT_VAR} to change): lower {key}",
-            gib(need),
-            gib(available)
+            "{named}: {particles} particles need about {}, more than {}: lower {key}",
+            size_text(need as f64),
+            memory_source(available)
         );
     }
     Ok(())
+}
+
+/// `bytes` in GiB, MiB or KiB (two decimals), whichever keeps it at least one.
+pub fn size_text(bytes: f64) -> String {
+    let (unit, name) = [(30, "GiB"), (20, "MiB"), (10, "KiB")]
+        .into_iter()
+        .map(|(shift, name)| ((1u64 << shift) as f64, name))
+        .find(|&(unit, _)| bytes >= unit)
+        .unwrap_or((1.0, "B"));
+    format!("{:.2} {name}", bytes / unit)
+}
+
+/// What set the limit [`memory_available`] gave, `available` bytes, for messages: the
+/// environment variable when it is set, else the machine's free memory.
+pub fn memory_source(available: u64) -> String {
+    let size = size_text(available as f64);
+    if std::env::var_os(MEMORY_LIMIT_VAR).is_some() {
+        format!("the {size} that {MEMORY_LIMIT_VAR} allows")
+    } else {
+        format!("the {size} available (MemAvailable; set {MEMORY_LIMIT_VAR} to change)")
+    }
 }
 
 /// The key that sets h in `cfg`, for messages.
@@ -226,6 +246,14 @@ mod tests {
             let e = lattice_count(counts).unwrap_err().to_string();
             assert!(e.contains("particles.n"), "{e}");
         }
+    }
+
+    #[test]
+    fn sizes_are_written_in_the_largest_unit_that_keeps_them_at_least_one() {
+        assert_eq!(size_text(3.0 * (1u64 << 30) as f64), "3.00 GiB");
+        assert_eq!(size_text((1u64 << 20) as f64), "1.00 MiB");
+        assert_eq!(size_text(1536.0), "1.50 KiB");
+        assert_eq!(size_text(12.0), "12.00 B");
     }
 
     #[test]

@@ -639,8 +639,13 @@ fn a_run_larger_than_the_memory_is_refused_naming_the_key() {
     let (code, err) = run(&["particles.n=100000"]);
     assert_eq!(code, Some(2), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
+    // The limit named as what set it, in a unit that shows it (before: "more than the
+    // 0.00 GiB available (MemAvailable; …)" for a limit set by hand).
     assert!(
-        err.contains("particles.n") && err.contains("available"),
+        err.contains("particles.n")
+            && err.contains("the 1.00 MiB that SPHDISK_MEMORY_LIMIT allows")
+            && !err.contains("MemAvailable")
+            && !err.contains("0.00"),
         "{err}"
     );
     let (code, err) = run(&[]);
