@@ -374,6 +374,12 @@ fn real_main(cli: Cli) -> Result<()> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     if let Some(t) = cli.threads {
         sphdisk::limits::check_threads("--threads", t, cores)?;
+    } else if let Some(t) = std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok())
+    {
+        // rayon's own setting, bounded as --threads is.
+        sphdisk::limits::check_threads("RAYON_NUM_THREADS", t, cores)?;
     }
     // Without --threads rayon's default (RAYON_NUM_THREADS, else one per core). The step loop
     // runs on one of these threads (`execute`), so they get the main thread's 8 MiB stack.

@@ -613,6 +613,33 @@ fn values_that_pass_validation_are_bounded_before_anything_is_allocated() {
     }
 }
 
+/// rayon's environment variable is bounded as `--threads` is (before, RAYON_NUM_THREADS=
+/// 100000 started a hundred thousand threads).
+#[test]
+fn too_many_threads_from_the_environment_are_refused_naming_the_variable() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let many = (16 * cores + 1).to_string();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_sphdisk"))
+        .args(["check", &problem("sod.toml")])
+        .env("RAYON_NUM_THREADS", &many)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: RAYON_NUM_THREADS") && err.contains(&many),
+        "{err}"
+    );
+    // --threads, where given, is what counts.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_sphdisk"))
+        .args(["--threads", "1", "check", &problem("sod.toml")])
+        .env("RAYON_NUM_THREADS", &many)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+}
+
 #[test]
 fn a_run_larger_than_the_memory_is_refused_naming_the_key() {
     let d = tempfile::tempdir().unwrap();
