@@ -173,6 +173,25 @@ fn a_wrong_header_fails_with_one_line_naming_the_file() {
     );
     assert!(!dir.path().join("lightcurve.json").exists());
 
+    // Skipping more than the curve holds: one short line saying how long the curve is
+    // (before, 1e300 was written out in its 301 digits).
+    let long = tempfile::tempdir().unwrap();
+    std::fs::write(long.path().join("lightcurve.csv"), synthetic_csv()).unwrap();
+    let run = long.path().to_string_lossy().into_owned();
+    for (skip, shown) in [("50", "first 50 orbits"), ("1e300", "first 1e300 orbits")] {
+        let (code, _, err) = common::sphdisk_cli(
+            None,
+            &["analyse", "lightcurve", &run, "--skip-orbits", skip],
+        );
+        assert_eq!(code, 2, "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(
+            err.contains(shown) && err.contains("rows over 39.9"),
+            "{err}"
+        );
+        assert!(err.len() < 300, "{err}");
+    }
+
     // No light curve at all: also one line naming the file.
     let empty = tempfile::tempdir().unwrap();
     let (code, _, err) = common::sphdisk_cli(
