@@ -117,6 +117,16 @@ pub fn check_memory<const D: usize>(particles: u64, key: &str) -> Result<()> {
     Ok(())
 }
 
+/// A number as a refusal shows it: plainly, or with an exponent where it is huge or tiny
+/// (`1e300`, not its 301 digits).
+pub fn show(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 /// `bytes` in GiB, MiB or KiB (two decimals), whichever keeps it at least one.
 pub fn size_text(bytes: f64) -> String {
     let (unit, name) = [(30, "GiB"), (20, "MiB"), (10, "KiB")]
@@ -246,6 +256,15 @@ mod tests {
             let e = lattice_count(counts).unwrap_err().to_string();
             assert!(e.contains("particles.n"), "{e}");
         }
+    }
+
+    #[test]
+    fn numbers_are_shown_with_an_exponent_only_where_huge_or_tiny() {
+        assert_eq!(show(1e300), "1e300");
+        assert_eq!(show(-2e-7), "-2e-7");
+        assert_eq!(show(50.0), "50");
+        assert_eq!(show(0.0), "0");
+        assert_eq!(show(f64::NAN), "NaN");
     }
 
     #[test]

@@ -17,6 +17,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::analysis::roche;
+use crate::limits::show;
 use crate::particles::Particles;
 use crate::rng::Rng;
 
@@ -118,16 +119,6 @@ impl StreamParams {
 
 fn one() -> f64 {
     1.0
-}
-
-/// A value for a message: exponent notation when very large or small (`1e300`, not 301
-/// digits).
-fn show(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-4..1e7).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
-    }
 }
 
 /// What the injector carries between steps (checkpointed).

@@ -20,6 +20,7 @@ use crate::analysis::annulus_stats;
 use crate::analysis::ring::SpreadingRing;
 use crate::boundary::BoundaryKind;
 use crate::config::{Config, RingParams};
+use crate::limits::show;
 use crate::particles::Particles;
 use crate::physics::eos::Eos;
 use crate::problems::{InitialState, make_box, smoothing_length};
@@ -86,15 +87,6 @@ impl RingRecord {
             );
         }
         Ok(())
-    }
-}
-
-/// A number as a message shows it: plainly, or with an exponent where it is huge or tiny.
-fn show(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
     }
 }
 

@@ -314,15 +314,10 @@ pub fn analyse_signal(
         bail!("only {} rows; need at least {MIN_ROWS}", used.len());
     }
     if used.len() < MIN_ROWS {
-        // 1e300 as such, not as its 301 digits.
-        let skip = if skip_orbits < 1e6 {
-            format!("{skip_orbits}")
-        } else {
-            format!("{skip_orbits:e}")
-        };
         bail!(
-            "only {} rows after skipping the first {skip} orbits (of {} rows over {:.3} orbits); need at least {MIN_ROWS}",
+            "only {} rows after skipping the first {} orbits (of {} rows over {:.3} orbits); need at least {MIN_ROWS}",
             used.len(),
+            crate::limits::show(skip_orbits),
             rows_all.len(),
             (rows_all[rows_all.len() - 1].t - first.t) / TAU
         );
