@@ -158,13 +158,13 @@ pub fn check_options(n: &[usize], neighbours: f64, window: Window) -> Result<()>
             total as f64 * neighbours / 2.0 * crate::sweep::pairs::BYTES_PER_PAIR as f64 * share;
         if let Some(available) = memory_available()? {
             let need = bytes + (total * crate::limits::bytes_per_particle::<3>()) as f64;
-            if need > available as f64 {
-                anyhow::bail!(
-                    "--neighbours {neighbours}: {total} particles and their pairs need about {}, more than {}: lower --neighbours or --n",
-                    crate::limits::size_text(need),
-                    crate::limits::memory_source(available)
-                );
-            }
+            crate::limits::check_need(
+                need,
+                available,
+                &format!("--neighbours {neighbours}"),
+                &format!("{total} particles and their pairs"),
+                "--neighbours or --n",
+            )?;
         }
     }
     Ok(())

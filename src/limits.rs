@@ -102,15 +102,27 @@ pub fn check_memory<const D: usize>(particles: u64, key: &str) -> Result<()> {
         return Ok(());
     };
     let need = particles.saturating_mul(bytes_per_particle::<D>());
-    if need > available {
-        let named = if key.starts_with("--") {
-            key.to_string()
-        } else {
-            format!("key `{key}`")
-        };
+    let named = if key.starts_with("--") {
+        key.to_string()
+    } else {
+        format!("key `{key}`")
+    };
+    check_need(
+        need as f64,
+        available,
+        &named,
+        &format!("{particles} particles"),
+        key,
+    )
+}
+
+/// Refuses `need` bytes beyond the `available` limit ([`memory_available`]): "`head`:
+/// `what` need about …, more than …: lower `lower`".
+pub fn check_need(need: f64, available: u64, head: &str, what: &str, lower: &str) -> Result<()> {
+    if need > available as f64 {
         bail!(
-            "{named}: {particles} particles need about {}, more than {}: lower {key}",
-            size_text(need as f64),
+            "{head}: {what} need about {}, more than {}: lower {lower}",
+            size_text(need),
             memory_source(available)
         );
     }
