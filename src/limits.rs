@@ -139,6 +139,71 @@ pub fn show(x: f64) -> String {
     }
 }
 
+/// The largest magnitude (and its inverse the smallest) a set-up's mass scale may take:
+/// densities, pressures and momenta are products and squares of it, which must stay within
+/// double precision (at 1e300 the summed momentum overflows; at 1e-300 the density
+/// underflows and the step fails with no cause named).
+pub const MAX_SCALE: f64 = 1e100;
+
+/// Refuses a mass (or transfer rate) `x` of key `key` outside [1/[`MAX_SCALE`],
+/// [`MAX_SCALE`]], as one line naming the key.
+pub fn check_scale(key: &str, x: f64) -> Result<(), String> {
+    if !(1.0 / MAX_SCALE..=MAX_SCALE).contains(&x) {
+        return Err(format!(
+            "key `{key}`: must lie between 1e-100 and 1e100 (densities and momenta are its \
+             products and squares), got {}",
+            show(x)
+        ));
+    }
+    Ok(())
+}
+
+/// Digits a number of a message may take before [`shorten_numbers`] writes it with an
+/// exponent: more than any figure a message means to show in full (a 64-bit count has 20).
+const LONGEST_PLAIN_NUMBER: usize = 24;
+
+/// `text` with every number written out in more than [`LONGEST_PLAIN_NUMBER`] characters
+/// (Rust writes `1e300` as 301 digits, `1e-300` as 302) shown as [`show`] shows it, so that
+/// an error line stays one readable line whatever number it echoes — the solver's own
+/// messages and those of the TOML parser alike. Numbers already with an exponent, and
+/// digits inside words or paths, are left as they are.
+pub fn shorten_numbers(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    let mut copied = 0;
+    while i < b.len() {
+        let starts = b[i].is_ascii_digit()
+            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || matches!(b[i - 1], b'.' | b'_')));
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j < b.len() && b[j].is_ascii_digit() {
+            j += 1;
+        }
+        if j + 1 < b.len() && b[j] == b'.' && b[j + 1].is_ascii_digit() {
+            j += 1;
+            while j < b.len() && b[j].is_ascii_digit() {
+                j += 1;
+            }
+        }
+        let glued = j < b.len() && (b[j].is_ascii_alphanumeric() || b[j] == b'_');
+        if j - i > LONGEST_PLAIN_NUMBER
+            && !glued
+            && let Ok(x) = text[i..j].parse::<f64>()
+        {
+            out.push_str(&text[copied..i]);
+            out.push_str(&show(x));
+            copied = j;
+        }
+        i = j;
+    }
+    out.push_str(&text[copied..]);
+    out
+}
+
 /// `bytes` in GiB, MiB or KiB (two decimals), whichever keeps it at least one.
 pub fn size_text(bytes: f64) -> String {
     let (unit, name) = [(30, "GiB"), (20, "MiB"), (10, "KiB")]
@@ -213,7 +278,75 @@ pub fn check_grid<const D: usize>(
             along[0]
         );
     }
-    Ok(())
+    check_pairs(cfg, h, pos)
+}
+
+/// Refuses a kernel support `support_factor · h` that would hold more neighbour pairs than
+/// the memory has room for ([`memory_available`]), naming the key that sets h: before, an h
+/// many times the particle spacing (`particles.h_factor = 1e300`) filled the memory with
+/// pairs until the system killed the run. The particles are binned in cells one support
+/// wide (the neighbour grid's); a particle's candidates are those of the 3^D cells around
+/// its own, an upper bound on its neighbours (a thin disk under a wide support is a 2D
+/// distribution in 3D cells, so no uniform share of them is assumed). The sweep holds the
+/// pairs of about three slabs (the paper's window): the most candidate pairs in three
+/// neighbouring slabs, with the particles' own memory ([`bytes_per_particle`]), must fit.
+/// (A 3D disk of 55 916 particles measured: 1.2 GiB peak at 1.9e8 bytes of candidate pairs
+/// estimated, 10.4 GiB at 1.2e10 — the estimate is the right size, not a margin.)
+pub fn check_pairs<const D: usize>(cfg: &Config, h: f64, pos: &[Vec<f64>; D]) -> Result<()> {
+    use std::collections::HashMap;
+    let Some(available) = memory_available()? else {
+        return Ok(());
+    };
+    let n = pos[0].len();
+    let support = cfg.particles.kernel.support_factor() * h;
+    if n == 0 || !(support > 0.0 && support.is_finite()) {
+        return Ok(());
+    }
+    let lo: [f64; D] =
+        std::array::from_fn(|d| pos[d].iter().copied().fold(f64::INFINITY, f64::min));
+    let cell = |i: usize| -> [i64; D] {
+        std::array::from_fn(|d| ((pos[d][i] - lo[d]) / support).floor() as i64)
+    };
+    let mut counts: HashMap<[i64; D], u64> = HashMap::new();
+    for i in 0..n {
+        *counts.entry(cell(i)).or_insert(0) += 1;
+    }
+    // Candidates (ordered, self included) of each slab along x.
+    let mut per_slab: HashMap<i64, f64> = HashMap::new();
+    for (c, &k) in &counts {
+        let mut around = 0u64;
+        for o in 0..3usize.pow(D as u32) {
+            let mut nb = *c;
+            let mut rest = o;
+            for x in nb.iter_mut() {
+                *x += (rest % 3) as i64 - 1;
+                rest /= 3;
+            }
+            around += counts.get(&nb).copied().unwrap_or(0);
+        }
+        *per_slab.entry(c[0]).or_insert(0.0) += (k * around) as f64;
+    }
+    let window = per_slab
+        .keys()
+        .map(|&s| {
+            (s - 1..=s + 1)
+                .map(|t| per_slab.get(&t).copied().unwrap_or(0.0))
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let pairs = window / 2.0;
+    let need = pairs * crate::sweep::pairs::BYTES_PER_PAIR as f64
+        + (n as u64).saturating_mul(bytes_per_particle::<D>()) as f64;
+    let most = counts.values().copied().max().unwrap_or(0);
+    check_need(
+        need,
+        available,
+        &format!("key `{}`", h_key(cfg)),
+        &format!(
+            "{n} particles and up to {pairs:.3e} neighbour pairs in the sweep's window (h = {h:.3e}: up to {most} particles in a cell one support wide)"
+        ),
+        h_key(cfg),
+    )
 }
 
 /// Refuses more than [`MAX_SNAPSHOTS`] snapshots of `output.interval` up to `t_end`.
@@ -277,6 +410,23 @@ mod tests {
         assert_eq!(show(50.0), "50");
         assert_eq!(show(0.0), "0");
         assert_eq!(show(f64::NAN), "NaN");
+    }
+
+    #[test]
+    fn long_numbers_in_messages_are_shortened_and_the_rest_left_alone() {
+        let huge = format!("got {}, and -{} with {}", 1e300, 1e300, 1e-300);
+        assert!(huge.len() > 900);
+        assert_eq!(shorten_numbers(&huge), "got 1e300, and -1e300 with 1e-300");
+        let tail = format!("`{}`", 2.5e-200);
+        assert_eq!(shorten_numbers(&tail), "`2.5e-200`");
+        for kept in [
+            "a lattice of 4294967295 particles at t = 0.30000000000000004",
+            "count 18446744073709551615 in /runs/run_1234567890123456789012345678/x.h5",
+            "dt = 2.510032514109954e-17, v2 1.5",
+            "",
+        ] {
+            assert_eq!(shorten_numbers(kept), kept);
+        }
     }
 
     #[test]

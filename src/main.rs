@@ -262,7 +262,10 @@ fn main() -> ExitCode {
     match real_main(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            report!("error: {e:#}");
+            report!(
+                "error: {}",
+                sphdisk::limits::shorten_numbers(&format!("{e:#}"))
+            );
             ExitCode::from(2)
         }
     }

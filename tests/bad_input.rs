@@ -904,3 +904,173 @@ fn analyse_ring_refuses_an_edited_summary_or_snapshot_naming_it() {
         &["ring/snap_0001.hdf5", "Coordinates"],
     );
 }
+
+/// `sphdisk check FILE --set …` with the memory limit `limit`, killed after a minute (a set-up
+/// that loops or fills the memory fails the test rather than hanging it): (exit code or
+/// None where killed, stderr).
+fn check_within_a_minute(file: &str, sets: &[&str], limit: &str) -> (Option<i32>, String) {
+    use std::io::Read;
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_sphdisk"));
+    cmd.args(["check", &problem(file)]);
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    let mut child = cmd
+        .env("SPHDISK_MEMORY_LIMIT", limit)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = stderr.read_to_string(&mut s);
+        s
+    });
+    let start = std::time::Instant::now();
+    let code = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status.code();
+        }
+        if start.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    (code, reader.join().unwrap())
+}
+
+#[test]
+fn set_ups_count_their_particles_and_pairs_before_making_them() {
+    // Before: the first two panicked (capacity overflow: a scale height of inf or 1e300
+    // ring spacings), the ring's r0 looped for ever on a surface density of 0 or inf, a
+    // ring of 3000 rings per r0 and a disk of 60 filled the memory, and an h of 8 ring
+    // spacings (3 700 particles in a support) took 120 s and 10 GiB to check — at 1e300
+    // the system killed it. The 2 GiB limit stands for a machine's memory.
+    let cases: [(&str, &[&str], &[&str]); 9] = [
+        (
+            "disk3d.toml",
+            &["eos.q=1e300"],
+            &["eos.cs0", "eos.q", "H/R"],
+        ),
+        (
+            "disk3d.toml",
+            &["eos.q=-1e300"],
+            &["eos.cs0", "eos.q", "H/R"],
+        ),
+        (
+            "disk3d.toml",
+            &["disk.layers_h=1e300"],
+            &["disk.layers_h", "particles"],
+        ),
+        (
+            "disk3d.toml",
+            &["particles.n=60"],
+            &["particles.n", "SPHDISK_MEMORY_LIMIT"],
+        ),
+        (
+            "ring.toml",
+            &["ring.r0=1e300"],
+            &["ring.r0", "surface density"],
+        ),
+        (
+            "ring.toml",
+            &["ring.r0=1e-300"],
+            &["ring.r0", "surface density"],
+        ),
+        (
+            "ring.toml",
+            &["particles.n=3000"],
+            &["particles.n", "SPHDISK_MEMORY_LIMIT"],
+        ),
+        (
+            "disk3d.toml",
+            &["particles.h_factor=8"],
+            &[
+                "particles.h_factor",
+                "neighbour pairs",
+                "SPHDISK_MEMORY_LIMIT",
+            ],
+        ),
+        (
+            "disk3d.toml",
+            &["particles.h_factor=1e300"],
+            &["particles.h_factor", "neighbour pairs"],
+        ),
+    ];
+    for (file, sets, expect) in cases {
+        let (code, err) = check_within_a_minute(file, sets, "2G");
+        assert_eq!(code, Some(2), "{file} {sets:?}: {err}");
+        assert!(!err.contains("panicked"), "{file} {sets:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{file} {sets:?}: {err}");
+        for e in expect {
+            assert!(err.contains(e), "{file} {sets:?}: `{e}` not in: {err}");
+        }
+    }
+    // The files as they are pass the same checks under the same limit.
+    for file in ["disk3d.toml", "ring.toml", "cv2d.toml"] {
+        let (code, err) = check_within_a_minute(file, &[], "2G");
+        assert_eq!(code, Some(0), "{file}: {err}");
+    }
+}
+
+#[test]
+fn masses_beyond_double_precision_and_a_kernel_wider_than_the_lobe_are_named() {
+    // Before: a ring or disk of mass 1e300 ran and wrote `momentum: null` (the sum
+    // overflowed); 1e-300 failed later as "every particle was accreted" (ring), "non-finite
+    // position" (disk) or "time step is 0" naming time.max_steps (stream); an h of 1e5 a
+    // ran a CV whose every particle neighbours every other.
+    let d = tempfile::tempdir().unwrap();
+    let cases: [(&str, &[&str], &[&str]); 6] = [
+        ("ring.toml", &["ring.mass=1e300"], &["ring.mass", "1e100"]),
+        ("ring.toml", &["ring.mass=1e-300"], &["ring.mass", "1e-100"]),
+        ("disk3d.toml", &["disk.mass=1e300"], &["disk.mass"]),
+        ("disk3d.toml", &["disk.mass=1e-300"], &["disk.mass"]),
+        (
+            "cv2d.toml",
+            &["stream.mass_per_orbit=1e-300"],
+            &["stream.mass_per_orbit"],
+        ),
+        ("cv2d.toml", &["particles.h=1e5"], &["particles.h", "L1"]),
+    ];
+    for (file, sets, expect) in cases {
+        assert_check_and_run_fail(d.path(), &problem(file), sets, expect);
+    }
+}
+
+#[test]
+fn huge_and_tiny_numbers_in_an_error_line_are_written_with_an_exponent() {
+    // Before: Rust writes 1e300 as its 301 digits and 1e-300 as 302, in the solver's
+    // messages and the TOML parser's alike; the line ran to 400–760 characters.
+    let d = tempfile::tempdir().unwrap();
+    let cases: [(&str, &[&str], &str); 5] = [
+        ("cv2d.toml", &["binary.q=1e-300"], "got 1e-300"),
+        (
+            "cv2d.toml",
+            &["binary.accretor_radius=-1e300"],
+            "got -1e300",
+        ),
+        ("disk3d.toml", &["particles.n=1e300"], "`1e300`"),
+        (
+            "sod.toml",
+            &["particles.h_factor=1e300"],
+            "2.0000000000000002e298",
+        ),
+        ("outbursts.toml", &["outbursts.cs_hot=1e-300"], "1e-300"),
+    ];
+    for (file, sets, shown) in cases {
+        let mut args = vec!["check".to_string(), problem(file)];
+        for s in sets {
+            args.extend(["--set".to_string(), s.to_string()]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, err) = sphdisk(d.path(), &args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(shown), "{args:?}: `{shown}` not in: {err}");
+        // The echoed override and the message's own words: well under 300 characters.
+        assert!(err.len() < 300, "{args:?}: {} characters: {err}", err.len());
+    }
+}

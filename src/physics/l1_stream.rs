@@ -57,13 +57,7 @@ impl StreamParams {
             ));
         }
         match (self.mass_per_orbit, self.mdot_msun_per_year) {
-            (Some(m), None) if m > 0.0 && m.is_finite() => {}
-            (Some(m), None) => {
-                return Err(format!(
-                    "key `stream.mass_per_orbit`: must be > 0 (a transfer rate), got {}",
-                    show(m)
-                ));
-            }
+            (Some(m), None) => crate::limits::check_scale("stream.mass_per_orbit", m)?,
             (None, Some(m)) if !physical => {
                 return Err(format!(
                     "key `stream.mdot_msun_per_year` ({m}) needs a binary in physical values \

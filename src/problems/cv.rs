@@ -56,6 +56,21 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         );
     }
     let h = cfg.particles.h.expect("validated: particles.h present");
+    // A disk inside the accretor's Roche lobe must be more than one kernel wide: a support
+    // reaching from the white dwarf to L1 resolves neither the stream nor the disk, and
+    // every particle would neighbour every other as the stream builds the disk.
+    let support = cfg.particles.kernel.support_factor() * h;
+    let d_l1 = roche::l1_distance(mt.binary.q);
+    if !(support < d_l1) {
+        bail!(
+            "key `particles.h`: the kernel's support ({}·h = {} a) reaches from the white dwarf \
+             past L1 ({d_l1:.4} a away at q = {}); a disk needs h well below {:.4} a",
+            cfg.particles.kernel.support_factor(),
+            crate::limits::show(support),
+            mt.binary.q,
+            d_l1 / cfg.particles.kernel.support_factor()
+        );
+    }
     let (lo, hi) = default_box::<D>(mt.binary.q);
     let bx = make_box(cfg, lo, hi, [BoundaryKind::Open; D]);
     let l1 = roche::l1_point(mt.binary.q);

@@ -74,6 +74,7 @@ struct Profile {
 impl Profile {
     fn new(cfg: &Config) -> Result<Self> {
         let dp = params(cfg);
+        crate::limits::check_scale("disk.mass", dp.mass).map_err(anyhow::Error::msg)?;
         if !(dp.mass > 0.0 && dp.r_in > 0.0 && dp.r_out > dp.r_in && dp.orbits > 0.0) {
             bail!(
                 "keys `disk.mass`, `disk.r_in` > 0, `disk.r_out` > `disk.r_in`, `disk.orbits` > 0"
@@ -99,6 +100,16 @@ impl Profile {
         let peak = (1..samples)
             .map(|k| shape(&dp, w, k as f64 * rmax / samples as f64))
             .fold(0.0, f64::max);
+        // The radii tried, counted before they are: a ring spacing tiny against r_in or
+        // r_out would otherwise walk through more of them than a run can hold particles.
+        let tried = (rmax - dp.r_in) / dr + (dp.r_in / dr).floor();
+        if !(tried <= crate::limits::MAX_PARTICLES as f64) {
+            bail!(
+                "keys `particles.n`, `disk.r_in` and `disk.r_out`: a ring spacing of {dr:.3e} \
+                 (r_out − r_in over n) gives {tried:.3e} rings out to 4 r_out, more than a run \
+                 can hold"
+            );
+        }
         let first = -((dp.r_in / dr).floor() as i64);
         let last = ((rmax - dp.r_in) / dr).ceil() as i64;
         let radii: Vec<f64> = (first..last)
@@ -255,17 +266,18 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
              `disk.r_out`) or lower the sound speed"
         );
     }
+    particle_count::<D>(&eq, dr)?;
     let mut p = Particles::new();
     // Each ring-and-layer of particles is one group: (R, z) and its members' indices.
     let mut groups: Vec<Group> = Vec::new();
     for (k, &r) in radii.iter().enumerate() {
-        let count = ((std::f64::consts::TAU * r / dr).round() as usize).max(1);
+        let count = ring_count(r, dr);
         let offset = if k % 2 == 1 { 0.5 } else { 0.0 };
         let layers: Vec<(f64, f64)> = if D == 2 {
             vec![(0.0, 1.0)]
         } else {
             let h = eq.scale_height(r);
-            let nz = ((dp.layers_h * h / dr).ceil() as i64).max(1);
+            let nz = layer_pairs(dp.layers_h, h, dr) as i64;
             let zs: Vec<f64> = (-nz..nz).map(|j| (j as f64 + 0.5) * dr).collect();
             let w: Vec<f64> = zs.iter().map(|z| (-z * z / (2.0 * h * h)).exp()).collect();
             let wsum: f64 = w.iter().sum();
@@ -316,6 +328,52 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         output_times: Vec::new(),
         injector: None,
     })
+}
+
+/// Particles on the ring of radius `r` (spacing `dr` along it, at least one).
+fn ring_count(r: f64, dr: f64) -> usize {
+    ((std::f64::consts::TAU * r / dr).round() as usize).max(1)
+}
+
+/// Layers above the midplane (as many below) that reach `layers_h` scale heights `h` in
+/// steps of `dr`; at least one.
+fn layer_pairs(layers_h: f64, h: f64, dr: f64) -> u64 {
+    ((layers_h * h / dr).ceil() as u64).max(1)
+}
+
+/// The particles the rings (and in 3D their layers) will hold, counted before any is made:
+/// refuses a disk whose scale height is not a thin disk's (H/R outside (0, 1], where the
+/// vertical profile and the rotation curve of the set-up hold), or whose particles are more
+/// than a run can hold or the memory has room for — naming the keys that set them.
+fn particle_count<const D: usize>(eq: &Equilibrium<'_, D>, dr: f64) -> Result<u64> {
+    use crate::limits::{MAX_PARTICLES, check_memory};
+    let dp = &eq.prof.dp;
+    let mut total = 0.0;
+    for &r in &eq.prof.radii {
+        let layers = if D == 2 {
+            1.0
+        } else {
+            let h = eq.scale_height(r);
+            if !(h > 0.0 && h <= r) {
+                bail!(
+                    "keys `eos.cs0` and `eos.q`: the disk's scale height H = c_s/Ω would be \
+                     {h:.3e} at R = {r:.3} (H/R = {:.3e}); the set-up needs a disk with \
+                     0 < H/R ≤ 1",
+                    h / r
+                );
+            }
+            2.0 * layer_pairs(dp.layers_h, h, dr) as f64
+        };
+        total += ring_count(r, dr) as f64 * layers;
+    }
+    if !(total <= MAX_PARTICLES as f64) {
+        bail!(
+            "keys `particles.n` and `disk.layers_h`: the disk's rings and layers would hold \
+             {total:.3e} particles, more than the {MAX_PARTICLES} a run can hold"
+        );
+    }
+    check_memory::<D>(total as u64, "particles.n")?;
+    Ok(total as u64)
 }
 
 /// One ring of particles at one height: they share R, z and (by symmetry) their mean force.

@@ -97,6 +97,7 @@ fn params(cfg: &Config) -> RingParams {
 /// The exact solution and the figures of this run.
 pub fn record(cfg: &Config) -> Result<RingRecord> {
     let r = params(cfg);
+    crate::limits::check_scale("ring.mass", r.mass).map_err(anyhow::Error::msg)?;
     let nu = match (cfg.viscosity.nu, cfg.viscosity.alpha) {
         (Some(nu), None) if nu > 0.0 => nu,
         _ => bail!("key `viscosity.nu`: the ring's exact solution needs a constant ν > 0"),
@@ -159,13 +160,23 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let peak = (0..4000)
         .map(|k| sigma(k as f64 * 3.0 * rp.r0 / 4000.0))
         .fold(0.0, f64::max);
-    // Ring radii r0 + k dr, outwards and inwards while Σ stays above the cut-off.
+    if !(peak > 0.0 && peak.is_finite()) {
+        bail!(
+            "keys `ring.r0` and `ring.mass`: the ring's surface density at tau_start is {} at \
+             its peak (r0 = {}, mass = {}), not a positive number",
+            show(peak),
+            show(rp.r0),
+            show(rp.mass)
+        );
+    }
+    // Ring radii r0 + k dr, outwards and inwards while Σ stays above the cut-off, and
+    // inside the box (4 r0).
     let mut radii = Vec::new();
     for dir in [1i64, -1] {
         let mut k: i64 = if dir > 0 { 0 } else { -1 };
         loop {
             let r = rp.r0 + k as f64 * dr;
-            if r <= 0.5 * dr || sigma(r) < rp.cutoff * peak {
+            if r <= 0.5 * dr || r >= 4.0 * rp.r0 || !(sigma(r) >= rp.cutoff * peak) {
                 break;
             }
             radii.push((k, r));
@@ -173,6 +184,18 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
         }
     }
     radii.sort_by(|a, b| a.1.total_cmp(&b.1));
+    // The particles, counted before any is made.
+    let ring_count = |r: f64| ((std::f64::consts::TAU * r / dr).round() as usize).max(1);
+    let total: f64 = radii.iter().map(|&(_, r)| ring_count(r) as f64).sum();
+    if !(total <= crate::limits::MAX_PARTICLES as f64) {
+        bail!(
+            "key `particles.n`: the ring's {} rings would hold {total:.3e} particles, more than \
+             the {} a run can hold",
+            radii.len(),
+            crate::limits::MAX_PARTICLES
+        );
+    }
+    crate::limits::check_memory::<D>(total as u64, "particles.n")?;
     // The innermost particle: its ring less half the jitter's width.
     let innermost = radii.first().map(|&(_, r)| r - 0.5 * rp.radial_jitter * dr);
     if let Some(acc) = g.accretion_radius
@@ -202,7 +225,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let mut rng = Rng::new(cfg.particles.seed);
     let mut p = Particles::new();
     for &(k, r_ring) in &radii {
-        let count = ((std::f64::consts::TAU * r_ring / dr).round() as usize).max(1);
+        let count = ring_count(r_ring);
         let offset = if k.rem_euclid(2) == 1 { 0.5 } else { 0.0 };
         for j in 0..count {
             // Each particle carries the annulus Σ(R) 2πR Δr / count at its own radius, so
