@@ -528,8 +528,9 @@ impl Config {
 
     /// Deserialises and validates a table; unknown keys, missing keys and bad values are
     /// reported with their dotted path.
-    pub fn from_table(table: toml::Table) -> Result<Self> {
+    pub fn from_table(mut table: toml::Table) -> Result<Self> {
         check_finite("", &table)?;
+        whole_numbers_as_integers(&mut table);
         let given = table.clone();
         let cfg: Config =
             serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
@@ -693,7 +694,7 @@ impl Config {
             _ => {}
         }
         if let Some(c) = &self.cooling {
-            c.validate(&self.eos, self.gravity.is_some() || self.binary.is_some())
+            c.validate(&self.eos, self.central_mass().map(|m| m.gm))
                 .map_err(|e| anyhow::anyhow!(e))?;
         }
         if let Some(o) = &self.outbursts {
@@ -836,6 +837,25 @@ fn check_finite(prefix: &str, t: &toml::Table) -> Result<()> {
         walk(&key, v)?;
     }
     Ok(())
+}
+
+/// Writes every whole number of `t` given as a float (`1e7`, `64.0`) as an integer, up to
+/// 2⁵³ where a float holds every integer exactly: TOML has no exponent for integers, and a
+/// step count or a resolution is naturally written `time.max_steps = 1e7`, which serde
+/// would refuse for an integer key ("invalid type: floating point"). A float key reads the
+/// integer back as the same number.
+fn whole_numbers_as_integers(t: &mut toml::Table) {
+    fn walk(v: &mut toml::Value) {
+        match v {
+            toml::Value::Float(x) if x.fract() == 0.0 && x.abs() <= 9_007_199_254_740_992.0 => {
+                *v = toml::Value::Integer(*x as i64);
+            }
+            toml::Value::Table(t) => t.iter_mut().for_each(|(_, v)| walk(v)),
+            toml::Value::Array(a) => a.iter_mut().for_each(walk),
+            _ => {}
+        }
+    }
+    t.iter_mut().for_each(|(_, v)| walk(v));
 }
 
 /// Refuses an array in `given` where the schema reads a table (`read`, the configuration
@@ -1032,6 +1052,26 @@ mod tests {
         assert!(e.contains("particles") && e.contains("nn"), "{e}");
         let e = load(SOD, &["eos.gama=1.4"]).unwrap_err().to_string();
         assert!(e.contains("eos") && e.contains("gama"), "{e}");
+    }
+
+    #[test]
+    fn whole_numbers_with_an_exponent_or_a_point_are_read_by_integer_keys() {
+        // Before: "key `time.max_steps`: invalid type: floating point `1e7`, expected u64".
+        let cfg = load(SOD, &["time.max_steps=1e7", "particles.n=64.0"]).unwrap();
+        assert_eq!(cfg.time.max_steps, 10_000_000);
+        assert_eq!(cfg.particles.n, Some(64));
+        // A float key reads them back as the same number; fractions and numbers beyond
+        // 2⁵³ stay refused by integer keys.
+        let cfg = load(SOD, &["time.end=1e0"]).unwrap();
+        assert_eq!(cfg.time.end, Some(1.0));
+        for bad in [
+            "particles.n=64.5",
+            "particles.seed=1e19",
+            "particles.n=-1e0",
+        ] {
+            let e = load(SOD, &[bad]).unwrap_err().to_string();
+            assert!(e.contains(bad.split('=').next().unwrap()), "{bad}: {e}");
+        }
     }
 
     #[test]

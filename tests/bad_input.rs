@@ -1032,9 +1032,10 @@ fn masses_beyond_double_precision_and_a_kernel_wider_than_the_lobe_are_named() {
     // Before: a ring or disk of mass 1e300 ran and wrote `momentum: null` (the sum
     // overflowed); 1e-300 failed later as "every particle was accreted" (ring), "non-finite
     // position" (disk) or "time step is 0" naming time.max_steps (stream); an h of 1e5 a
-    // ran a CV whose every particle neighbours every other.
+    // ran a CV whose every particle neighbours every other; a cooling target of 1e300 made
+    // the first step's internal energy NaN.
     let d = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[&str], &[&str]); 6] = [
+    let cases: [(&str, &[&str], &[&str]); 7] = [
         ("ring.toml", &["ring.mass=1e300"], &["ring.mass", "1e100"]),
         ("ring.toml", &["ring.mass=1e-300"], &["ring.mass", "1e-100"]),
         ("disk3d.toml", &["disk.mass=1e300"], &["disk.mass"]),
@@ -1045,6 +1046,12 @@ fn masses_beyond_double_precision_and_a_kernel_wider_than_the_lobe_are_named() {
             &["stream.mass_per_orbit"],
         ),
         ("cv2d.toml", &["particles.h=1e5"], &["particles.h", "L1"]),
+        // Before: "particle 0 has internal energy NaN …: reduce time.courant or time.energy".
+        (
+            "cv2d_cooling.toml",
+            &["cooling.cs0=1e300"],
+            &["cooling.cs0", "orbital speed"],
+        ),
     ];
     for (file, sets, expect) in cases {
         assert_check_and_run_fail(d.path(), &problem(file), sets, expect);

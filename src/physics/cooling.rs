@@ -53,7 +53,8 @@ fn yes() -> bool {
 
 impl Cooling {
     /// One line naming the offending key, or Ok.
-    pub fn validate(&self, eos: &Eos, has_central_mass: bool) -> Result<(), String> {
+    /// `central_gm`: G M of the central mass (the accretor's in a binary), if there is one.
+    pub fn validate(&self, eos: &Eos, central_gm: Option<f64>) -> Result<(), String> {
         if !(self.beta > 0.0 && self.beta <= 1e6) {
             return Err(format!(
                 "key `cooling.beta`: must be > 0 and ≤ 1e6 (orbits' worth of 1/Ω), got {}",
@@ -61,7 +62,10 @@ impl Cooling {
             ));
         }
         if !(self.cs0 > 0.0 && self.cs0.is_finite()) {
-            return Err(format!("key `cooling.cs0`: must be > 0, got {}", self.cs0));
+            return Err(format!(
+                "key `cooling.cs0`: must be > 0, got {}",
+                crate::limits::show(self.cs0)
+            ));
         }
         if !(self.r0 > 0.0 && self.r0.is_finite()) {
             return Err(format!("key `cooling.r0`: must be > 0, got {}", self.r0));
@@ -78,11 +82,21 @@ impl Cooling {
                     .into(),
             );
         }
-        if !has_central_mass {
+        let Some(gm) = central_gm else {
             return Err(
                 "table `[cooling]`: the cooling time β/Ω_K needs a central mass ([gravity] or [binary])"
                     .into(),
             );
+        };
+        // A target sound speed as fast as the orbit at r0 is no disk's (cs0 = 1e300 made the
+        // first step's internal energy NaN, and the message blamed the time step).
+        let orbital = (gm / self.r0).sqrt();
+        if !(self.cs0 < orbital) {
+            return Err(format!(
+                "key `cooling.cs0`: must be below the orbital speed at cooling.r0, √(GM/r0) = \
+                 {orbital:.4}, got {}",
+                crate::limits::show(self.cs0)
+            ));
         }
         Ok(())
     }
@@ -190,22 +204,38 @@ mod tests {
             heats: true,
         };
         let ideal = Eos::Ideal { gamma: 1.4 };
-        assert!(c.validate(&ideal, true).is_ok());
+        assert!(c.validate(&ideal, Some(1.0)).is_ok());
         assert!(
-            c.validate(&Eos::Isothermal { cs: 0.1 }, true)
+            c.validate(&Eos::Isothermal { cs: 0.1 }, Some(1.0))
                 .unwrap_err()
                 .contains("ideal")
         );
         assert!(
-            c.validate(&ideal, false)
+            c.validate(&ideal, None)
                 .unwrap_err()
                 .contains("central mass")
         );
         let bad = Cooling { beta: 0.0, ..c };
         assert!(
-            bad.validate(&ideal, true)
+            bad.validate(&ideal, Some(1.0))
                 .unwrap_err()
                 .contains("cooling.beta")
+        );
+        // The orbital speed at r0 bounds the target: √(GM/r0) = 0.5 here.
+        let hot = Cooling {
+            cs0: 0.6,
+            r0: 4.0,
+            ..c
+        };
+        assert!(
+            hot.validate(&ideal, Some(1.0))
+                .unwrap_err()
+                .contains("cooling.cs0")
+        );
+        assert!(
+            Cooling { cs0: 0.4, ..hot }
+                .validate(&ideal, Some(1.0))
+                .is_ok()
         );
     }
 }
