@@ -960,7 +960,7 @@ fn set_ups_count_their_particles_and_pairs_before_making_them() {
     // ring of 3000 rings per r0 and a disk of 60 filled the memory, and an h of 8 ring
     // spacings (3 700 particles in a support) took 120 s and 10 GiB to check — at 1e300
     // the system killed it. The 2 GiB limit stands for a machine's memory.
-    let cases: [(&str, &[&str], &[&str]); 9] = [
+    let cases: [(&str, &[&str], &[&str]); 11] = [
         (
             "disk3d.toml",
             &["eos.q=1e300"],
@@ -995,6 +995,17 @@ fn set_ups_count_their_particles_and_pairs_before_making_them() {
             "ring.toml",
             &["particles.n=3000"],
             &["particles.n", "SPHDISK_MEMORY_LIMIT"],
+        ),
+        // 10⁹ rings per r0 (4·10⁹ radii to walk) and a disk spacing of 6e-9 (10⁹ radii).
+        (
+            "ring.toml",
+            &["particles.n=1000000000"],
+            &["particles.n", "ring at r0"],
+        ),
+        (
+            "disk3d.toml",
+            &["particles.n=100000000"],
+            &["particles.n", "radii"],
         ),
         (
             "disk3d.toml",

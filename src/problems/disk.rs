@@ -101,13 +101,16 @@ impl Profile {
             .map(|k| shape(&dp, w, k as f64 * rmax / samples as f64))
             .fold(0.0, f64::max);
         // The radii tried, counted before they are: a ring spacing tiny against r_in or
-        // r_out would otherwise walk through more of them than a run can hold particles.
+        // r_out would otherwise walk through (and keep) more of them than the run could hold
+        // particles. A disk has more particles than radii tried (about π n² (r_out + r_in)
+        // against 5 n r_out, over r_out − r_in), so this refuses no disk that would fit.
         let tried = (rmax - dp.r_in) / dr + (dp.r_in / dr).floor();
-        if !(tried <= crate::limits::MAX_PARTICLES as f64) {
+        let budget = crate::limits::particle_budget::<3>()?;
+        if !(tried <= budget) {
             bail!(
                 "keys `particles.n`, `disk.r_in` and `disk.r_out`: a ring spacing of {dr:.3e} \
-                 (r_out − r_in over n) gives {tried:.3e} rings out to 4 r_out, more than a run \
-                 can hold"
+                 (r_out − r_in over n) tries {tried:.3e} radii out to 4 r_out, more rings than \
+                 the {budget:.3e} particles a run here can hold"
             );
         }
         let first = -((dp.r_in / dr).floor() as i64);

@@ -169,6 +169,16 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
             show(rp.mass)
         );
     }
+    // The ring at r0 alone holds 2π n particles: a run that cannot hold them is refused
+    // before the radii are walked (up to 4 n of them).
+    let budget = crate::limits::particle_budget::<D>()?;
+    let at_r0 = std::f64::consts::TAU * n as f64;
+    if !(at_r0 <= budget) {
+        bail!(
+            "key `particles.n`: {n} rings per r0 put {at_r0:.3e} particles on the ring at r0 \
+             alone, more than the {budget:.3e} a run here can hold"
+        );
+    }
     // Ring radii r0 + k dr, outwards and inwards while Σ stays above the cut-off, and
     // inside the box (4 r0).
     let mut radii = Vec::new();
