@@ -504,12 +504,7 @@ impl Config {
         }
         let mut cfg = Self::from_table(table).map_err(|e| {
             // An error about a key an override set names the override, not the file.
-            let blamed = named_key(&format!("{e:#}")).and_then(|key| {
-                overrides
-                    .iter()
-                    .find(|o| override_touches(o, &key))
-                    .map(|o| format!("--set {o}"))
-            });
+            let blamed = blamed_override(&format!("{e:#}"), overrides);
             e.context(blamed.unwrap_or_else(|| path.display().to_string()))
         })?;
         if cfg.problem.name.is_none() {
@@ -956,6 +951,17 @@ fn check_applies(given: &toml::Table, kind: ProblemKind) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `--set KEY=VALUE` for the override among `overrides` that set the key the error message
+/// `msg` names (itself, a key inside it or its table), if one did.
+pub fn blamed_override(msg: &str, overrides: &[String]) -> Option<String> {
+    named_key(msg).and_then(|key| {
+        overrides
+            .iter()
+            .find(|o| override_touches(o, &key))
+            .map(|o| format!("--set {o}"))
+    })
 }
 
 /// The dotted key an error message names first (`key `a.b``, `table `[a]``, or an

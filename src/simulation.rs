@@ -168,21 +168,34 @@ pub fn resume_dimension(overrides: &[String], opts: &RunOptions) -> Result<usize
         match usable {
             Ok(d) => return Ok(d),
             Err(e) if k == 0 && e.is::<ForeignRun>() => return Err(e),
+            Err(e) if e.is::<BadOverride>() => return Err(e),
             Err(e) => {
                 first_err.get_or_insert(e);
             }
         }
     }
-    Err(no_checkpoint(opts, first_err))
+    Err(no_checkpoint(opts, overrides, first_err))
 }
 
-/// The error of a run folder none of whose checkpoints can be resumed from.
-fn no_checkpoint(opts: &RunOptions, newest_err: Option<anyhow::Error>) -> anyhow::Error {
+/// The error of a run folder none of whose checkpoints can be resumed from: the newest
+/// one's reason, under the override it names where one of `overrides` set that key
+/// (`--set time.end=…: key `time.end`: … before the checkpoint's time`).
+fn no_checkpoint(
+    opts: &RunOptions,
+    overrides: &[String],
+    newest_err: Option<anyhow::Error>,
+) -> anyhow::Error {
     match newest_err {
-        Some(e) => e.context(format!(
-            "no usable checkpoint to resume from in {}",
-            checkpoint::folder(&opts.out).display()
-        )),
+        Some(e) => {
+            let head =
+                crate::config::blamed_override(&format!("{e:#}"), overrides).unwrap_or_else(|| {
+                    format!(
+                        "no usable checkpoint to resume from in {}",
+                        checkpoint::folder(&opts.out).display()
+                    )
+                });
+            e.context(head)
+        }
         None => anyhow::anyhow!(
             "{} has no checkpoint to resume from (looked in {})",
             opts.out.display(),
@@ -203,6 +216,20 @@ impl std::fmt::Display for ForeignRun {
 }
 
 impl std::error::Error for ForeignRun {}
+
+/// An override of `--resume --set` that no checkpoint can take (a key a resume may not
+/// change, or a value its checks refuse): reported as the override's fault, not as "no
+/// usable checkpoint", and without trying the older checkpoints.
+#[derive(Debug)]
+struct BadOverride(String);
+
+impl std::fmt::Display for BadOverride {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadOverride {}
 
 /// Keys `--resume --set` may change: when and what the run writes, how far it goes.
 const RESUMABLE_KEYS: [&str; 3] = ["time.", "output.", "sweep."];
@@ -232,16 +259,29 @@ fn load_checkpoint<const D: usize>(
         .config_toml
         .parse()
         .with_context(|| format!("{what}: stored configuration"))?;
+    let stored = table.clone();
     for o in overrides {
         let key = o.split_once('=').map_or(o.as_str(), |(k, _)| k.trim());
         if !RESUMABLE_KEYS.iter().any(|p| key.starts_with(p)) {
-            bail!(
+            return Err(BadOverride(format!(
                 "--set {key}: cannot change when a run is resumed (only time.*, output.* and sweep.* can); start a new run instead"
-            );
+            ))
+            .into());
         }
-        crate::config::apply_override(&mut table, o)?;
+        crate::config::apply_override(&mut table, o).map_err(|e| BadOverride(format!("{e:#}")))?;
     }
-    let cfg = Config::from_table(table).with_context(|| format!("{what}: configuration"))?;
+    let cfg = match Config::from_table(table) {
+        Ok(cfg) => cfg,
+        // The stored configuration is sound and an override is not: the override's fault,
+        // the same at every checkpoint.
+        Err(e) if !overrides.is_empty() && Config::from_table(stored).is_ok() => {
+            let msg = format!("{e:#}");
+            let blamed = crate::config::blamed_override(&msg, overrides)
+                .unwrap_or_else(|| format!("--set {}", overrides.join(" --set ")));
+            return Err(BadOverride(format!("{blamed}: {msg}")).into());
+        }
+        Err(e) => return Err(e.context(format!("{what}: configuration"))),
+    };
     if cfg.dimension() != D {
         bail!(
             "{what}: the configuration is {}D, the particles {D}D",
@@ -655,13 +695,14 @@ pub fn resume_in_team<const D: usize>(
                 return advance(run, opts, log, team);
             }
             Err(e) if k == 0 && e.is::<ForeignRun>() => return Err(e),
+            Err(e) if e.is::<BadOverride>() => return Err(e),
             Err(e) => {
                 log.line(&format!("skip checkpoint: {e:#}"));
                 first_err.get_or_insert(e);
             }
         }
     }
-    Err(no_checkpoint(opts, first_err))
+    Err(no_checkpoint(opts, overrides, first_err))
 }
 
 /// The end time of a run (`time.end`, or the problem's own `problem_t_end`) and its

@@ -304,3 +304,42 @@ fn a_finished_run_is_extended_with_new_end_and_interval() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("time.end"), "{err}");
 }
+
+#[test]
+fn a_bad_override_is_named_as_the_override_not_as_the_checkpoints() {
+    // Before: "no usable checkpoint to resume from in …/checkpoints: …/ckpt_…: configuration:
+    // key `sweep.batch_per_thread`: …", after trying every checkpoint with the override,
+    // as if the checkpoints were at fault.
+    let d = tempfile::tempdir().unwrap();
+    let (_, b) = runs(d.path());
+    let cases: [(&str, &[&str]); 4] = [
+        (
+            "sweep.batch_per_thread=0",
+            &["--set sweep.batch_per_thread=0:", "sweep.batch_per_thread"],
+        ),
+        (
+            "eos.gamma=2",
+            &["--set eos.gamma:", "cannot change when a run is resumed"],
+        ),
+        (
+            "time.end=1e-300",
+            &["--set time.end=1e-300:", "before the checkpoint's time"],
+        ),
+        (
+            "output.interval=1e-300",
+            &["--set output.interval=1e-300:", "snapshots"],
+        ),
+    ];
+    for (set, expect) in cases {
+        let (code, err) = sphdisk(&["run", "--resume", &s(&b), "--quiet", "--set", set]);
+        assert_eq!(code, 2, "{set}: {err}");
+        assert_eq!(err.lines().count(), 1, "{set}: {err}");
+        assert!(!err.contains("no usable checkpoint"), "{set}: {err}");
+        for e in expect {
+            assert!(err.contains(e), "{set}: `{e}` not in: {err}");
+        }
+    }
+    // Both checkpoints are still there and resumable.
+    assert_eq!(checkpoint::list(&b).unwrap().len(), 2);
+    ok(&["run", "--resume", &s(&b), "--quiet"]);
+}
