@@ -167,8 +167,7 @@ pub fn resume_dimension(overrides: &[String], opts: &RunOptions) -> Result<usize
         });
         match usable {
             Ok(d) => return Ok(d),
-            Err(e) if k == 0 && e.is::<ForeignRun>() => return Err(e),
-            Err(e) if e.is::<BadOverride>() => return Err(e),
+            Err(e) if Final::ends_search(&e, k) => return Err(e),
             Err(e) => {
                 first_err.get_or_insert(e);
             }
@@ -204,32 +203,39 @@ fn no_checkpoint(
     }
 }
 
-/// A checkpoint of another run than the one whose folder it lies in (its run id differs
-/// from the folder's `run.id`): never resumed from.
+/// A refusal no older checkpoint can cure, so the search for a usable one stops at it.
 #[derive(Debug)]
-struct ForeignRun(String);
+enum Final {
+    /// A checkpoint of another run than the one whose folder it lies in (its run id differs
+    /// from the folder's `run.id`): never resumed from, and not fallen back from where it
+    /// is the newest.
+    ForeignRun(String),
+    /// An override of `--resume --set` that no checkpoint can take (a key a resume may not
+    /// change, or a value its checks refuse): reported as the override's fault, not as "no
+    /// usable checkpoint", and without trying the older checkpoints.
+    BadOverride(String),
+}
 
-impl std::fmt::Display for ForeignRun {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+impl Final {
+    /// Whether `e`, met at the `k`-th newest checkpoint, ends the search.
+    fn ends_search(e: &anyhow::Error, k: usize) -> bool {
+        match e.downcast_ref::<Final>() {
+            Some(Final::ForeignRun(_)) => k == 0,
+            Some(Final::BadOverride(_)) => true,
+            None => false,
+        }
     }
 }
 
-impl std::error::Error for ForeignRun {}
-
-/// An override of `--resume --set` that no checkpoint can take (a key a resume may not
-/// change, or a value its checks refuse): reported as the override's fault, not as "no
-/// usable checkpoint", and without trying the older checkpoints.
-#[derive(Debug)]
-struct BadOverride(String);
-
-impl std::fmt::Display for BadOverride {
+impl std::fmt::Display for Final {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+        match self {
+            Final::ForeignRun(m) | Final::BadOverride(m) => f.write_str(m),
+        }
     }
 }
 
-impl std::error::Error for BadOverride {}
+impl std::error::Error for Final {}
 
 /// Keys `--resume --set` may change: when and what the run writes, how far it goes.
 const RESUMABLE_KEYS: [&str; 3] = ["time.", "output.", "sweep."];
@@ -263,12 +269,13 @@ fn load_checkpoint<const D: usize>(
     for o in overrides {
         let key = o.split_once('=').map_or(o.as_str(), |(k, _)| k.trim());
         if !RESUMABLE_KEYS.iter().any(|p| key.starts_with(p)) {
-            return Err(BadOverride(format!(
+            return Err(Final::BadOverride(format!(
                 "--set {key}: cannot change when a run is resumed (only time.*, output.* and sweep.* can); start a new run instead"
             ))
             .into());
         }
-        crate::config::apply_override(&mut table, o).map_err(|e| BadOverride(format!("{e:#}")))?;
+        crate::config::apply_override(&mut table, o)
+            .map_err(|e| Final::BadOverride(format!("{e:#}")))?;
     }
     let cfg = match Config::from_table(table) {
         Ok(cfg) => cfg,
@@ -278,7 +285,7 @@ fn load_checkpoint<const D: usize>(
             let msg = format!("{e:#}");
             let blamed = crate::config::blamed_override(&msg, overrides)
                 .unwrap_or_else(|| format!("--set {}", overrides.join(" --set ")));
-            return Err(BadOverride(format!("{blamed}: {msg}")).into());
+            return Err(Final::BadOverride(format!("{blamed}: {msg}")).into());
         }
         Err(e) => return Err(e.context(format!("{what}: configuration"))),
     };
@@ -298,7 +305,7 @@ fn load_checkpoint<const D: usize>(
         } else {
             st.run_id.clone()
         };
-        return Err(ForeignRun(format!(
+        return Err(Final::ForeignRun(format!(
             "{what} belongs to another run (run id {theirs}) than the one in its folder ({} says {id}): remove it, or resume the folder it came from",
             run_folder::RUN_ID_FILE
         ))
@@ -694,8 +701,7 @@ pub fn resume_in_team<const D: usize>(
                 team.distribute(&mut run.p, &run.bx);
                 return advance(run, opts, log, team);
             }
-            Err(e) if k == 0 && e.is::<ForeignRun>() => return Err(e),
-            Err(e) if e.is::<BadOverride>() => return Err(e),
+            Err(e) if Final::ends_search(&e, k) => return Err(e),
             Err(e) => {
                 log.line(&format!("skip checkpoint: {e:#}"));
                 first_err.get_or_insert(e);
