@@ -116,6 +116,23 @@ pub fn check_memory<const D: usize>(particles: u64, key: &str) -> Result<()> {
     )
 }
 
+/// Refuses a set-up's `total` particles (counted in f64 before any is made) beyond
+/// [`MAX_PARTICLES`] — "`head`: `what` would hold … particles" — or beyond the memory
+/// ([`check_memory`], naming `key`).
+pub fn check_particle_count<const D: usize>(
+    total: f64,
+    head: &str,
+    what: &str,
+    key: &str,
+) -> Result<()> {
+    if !(total <= MAX_PARTICLES as f64) {
+        bail!(
+            "{head}: {what} would hold {total:.3e} particles, more than the {MAX_PARTICLES} a run can hold"
+        );
+    }
+    check_memory::<D>(total as u64, key)
+}
+
 /// The most particles a `D`-dimensional run may hold here: [`MAX_PARTICLES`], or fewer
 /// where the memory ([`memory_available`], at [`bytes_per_particle`]) holds fewer. For
 /// set-ups that walk rings or layers before they count their particles: a walk longer than

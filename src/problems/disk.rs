@@ -18,7 +18,7 @@ use crate::config::{Config, DiskParams};
 use crate::particles::Particles;
 use crate::physics::eos::Eos;
 use crate::physics::viscosity::ViscosityModel;
-use crate::problems::{InitialState, make_box, smoothing_length};
+use crate::problems::{InitialState, make_box, ring_count, smoothing_length};
 
 fn params(cfg: &Config) -> DiskParams {
     cfg.disk.clone().unwrap_or_default()
@@ -333,11 +333,6 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     })
 }
 
-/// Particles on the ring of radius `r` (spacing `dr` along it, at least one).
-fn ring_count(r: f64, dr: f64) -> usize {
-    ((std::f64::consts::TAU * r / dr).round() as usize).max(1)
-}
-
 /// Layers above the midplane (as many below) that reach `layers_h` scale heights `h` in
 /// steps of `dr`; at least one.
 fn layer_pairs(layers_h: f64, h: f64, dr: f64) -> u64 {
@@ -349,7 +344,6 @@ fn layer_pairs(layers_h: f64, h: f64, dr: f64) -> u64 {
 /// vertical profile and the rotation curve of the set-up hold), or whose particles are more
 /// than a run can hold or the memory has room for — naming the keys that set them.
 fn particle_count<const D: usize>(eq: &Equilibrium<'_, D>, dr: f64) -> Result<u64> {
-    use crate::limits::{MAX_PARTICLES, check_memory};
     let dp = &eq.prof.dp;
     let mut total = 0.0;
     for &r in &eq.prof.radii {
@@ -369,13 +363,12 @@ fn particle_count<const D: usize>(eq: &Equilibrium<'_, D>, dr: f64) -> Result<u6
         };
         total += ring_count(r, dr) as f64 * layers;
     }
-    if !(total <= MAX_PARTICLES as f64) {
-        bail!(
-            "keys `particles.n` and `disk.layers_h`: the disk's rings and layers would hold \
-             {total:.3e} particles, more than the {MAX_PARTICLES} a run can hold"
-        );
-    }
-    check_memory::<D>(total as u64, "particles.n")?;
+    crate::limits::check_particle_count::<D>(
+        total,
+        "keys `particles.n` and `disk.layers_h`",
+        "the disk's rings and layers",
+        "particles.n",
+    )?;
     Ok(total as u64)
 }
 

@@ -58,6 +58,12 @@ pub fn smoothing_length(cfg: &Config, reference_spacing: f64) -> f64 {
         .unwrap_or_else(|| cfg.particles.h_factor.unwrap_or(1.2) * reference_spacing)
 }
 
+/// Particles on a ring of radius `r` spaced `dr` along it (at least one): the disk's and
+/// the spreading ring's rings.
+pub(crate) fn ring_count(r: f64, dr: f64) -> usize {
+    ((std::f64::consts::TAU * r / dr).round() as usize).max(1)
+}
+
 /// The box: the problem's own, or `[domain]`; boundary kinds from `[boundary]` or the
 /// problem's defaults.
 pub fn make_box<const D: usize>(

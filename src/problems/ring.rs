@@ -23,7 +23,7 @@ use crate::config::{Config, RingParams};
 use crate::limits::show;
 use crate::particles::Particles;
 use crate::physics::eos::Eos;
-use crate::problems::{InitialState, make_box, smoothing_length};
+use crate::problems::{InitialState, make_box, ring_count, smoothing_length};
 use crate::rng::Rng;
 
 /// What `summary.json` records of a ring run, so that it can be checked from its own output.
@@ -195,17 +195,13 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     }
     radii.sort_by(|a, b| a.1.total_cmp(&b.1));
     // The particles, counted before any is made.
-    let ring_count = |r: f64| ((std::f64::consts::TAU * r / dr).round() as usize).max(1);
-    let total: f64 = radii.iter().map(|&(_, r)| ring_count(r) as f64).sum();
-    if !(total <= crate::limits::MAX_PARTICLES as f64) {
-        bail!(
-            "key `particles.n`: the ring's {} rings would hold {total:.3e} particles, more than \
-             the {} a run can hold",
-            radii.len(),
-            crate::limits::MAX_PARTICLES
-        );
-    }
-    crate::limits::check_memory::<D>(total as u64, "particles.n")?;
+    let total: f64 = radii.iter().map(|&(_, r)| ring_count(r, dr) as f64).sum();
+    crate::limits::check_particle_count::<D>(
+        total,
+        "key `particles.n`",
+        &format!("the ring's {} rings", radii.len()),
+        "particles.n",
+    )?;
     // The innermost particle: its ring less half the jitter's width.
     let innermost = radii.first().map(|&(_, r)| r - 0.5 * rp.radial_jitter * dr);
     if let Some(acc) = g.accretion_radius
@@ -235,7 +231,7 @@ pub fn setup<const D: usize>(cfg: &Config) -> Result<InitialState<D>> {
     let mut rng = Rng::new(cfg.particles.seed);
     let mut p = Particles::new();
     for &(k, r_ring) in &radii {
-        let count = ring_count(r_ring);
+        let count = ring_count(r_ring, dr);
         let offset = if k.rem_euclid(2) == 1 { 0.5 } else { 0.0 };
         for j in 0..count {
             // Each particle carries the annulus Σ(R) 2πR Δr / count at its own radius, so
