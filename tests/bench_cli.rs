@@ -65,9 +65,10 @@ fn bench_writes_a_consistent_csv_of_thread_scaling() {
         assert!(f("pairs_per_second_per_core") * f("threads") <= f("pairs_per_second") * 1.000001);
         // Bytes moved per pair (sphdisk::sweep::cost): the three sums' fixed 528 B (72 + 240
         // + 216: the record, the second partner's fields and accumulator), and pair
-        // finding's 32 B per pair plus 25 B per candidate tested and 64 B per stencil-cell
-        // box tested.
-        let bytes = 560.0 + 25.0 * f("candidates_per_pair") + 64.0 * f("cells_per_pair");
+        // finding's 60 B per pair (the partner list's index and r² read back, r written and
+        // read, the record stored) plus 37 B per candidate tested (x and class read, index
+        // and r² listed) and 64 B per stencil-cell box tested.
+        let bytes = 588.0 + 37.0 * f("candidates_per_pair") + 64.0 * f("cells_per_pair");
         assert!((f("bytes_per_pair") - bytes).abs() < 0.01, "{row}");
         assert!(
             f("flops_per_pair") > 0.0

@@ -15,8 +15,10 @@
 //! once for all its pairs (they are consecutive; about 25 per particle here), so they count
 //! with the per-particle work. Pair finding: per occupied stencil cell and particle, the
 //! cell's range and box and the test of the box against the particle's reach; per candidate
-//! tested, its position and pair class; per pair found, the record stored (a group's list
-//! is shrunk where it lies, not copied). Sizes are taken from the types themselves, so the
+//! tested, its position and pair class read and its index and r² written to the particle's
+//! partner list (every candidate is written; the list's length counts the partners); per
+//! pair found, the index and r² read back, r written over r² and read again, and the record
+//! stored (a group's list is shrunk where it lies, not copied). Sizes are taken from the types themselves, so the
 //! counts follow any change of them. Not counted: per-particle work (the first partner's
 //! fields and accumulator, zeroing and merging the per-task buffers, the finishing of
 //! slabs), and the growth of the per-thread pair vectors.
@@ -138,14 +140,17 @@ pub fn find<const D: usize>(candidates_per_pair: f64, cells_per_pair: f64) -> Pa
     let cell_bytes = size_of::<StencilCell<D>>();
     // r² = Σ (x_i − x_j)²: D subtractions, D products, D sums (from 0.0).
     let candidate_flops = 3.0 * D as f64;
-    let candidate_bytes = position::<D>() + field::<D, _>(|l| &l.class);
+    // x and the class read; the index and r² written to the partner list.
+    let listed = size_of::<u32>() + size_of::<f64>();
+    let candidate_bytes = position::<D>() + field::<D, _>(|l| &l.class) + listed;
     let inner = 0.5f64.powi(D as i32);
     // q < 1: 1 − 1.5 q² + 0.75 q³ (5 ×, 2 ±) and −3 + 2.25 q (1 ×, 1 +);
     // 1 ≤ q < 2: t = 2 − q, 0.25 t³ (1 −, 3 ×) and −0.75 t²/q (2 ×, 1 ÷).
     let shape = inner * 9.0 + (1.0 - inner) * 7.0;
     // √r², q = r/unit, the two normalisations.
     let pair_flops = 4.0 + shape;
-    let pair_bytes = size_of::<Pair>();
+    // The index and r² read back, r written and read, the record stored.
+    let pair_bytes = listed + 2 * size_of::<f64>() + size_of::<Pair>();
     PairCost {
         flops: cells_per_pair * cell_flops + candidates_per_pair * candidate_flops + pair_flops,
         bytes: cells_per_pair * cell_bytes as f64
@@ -303,12 +308,13 @@ mod tests {
             ..hydro
         };
         assert_eq!(force::<3>(&cond).bytes - force::<3>(&hydro).bytes, 8.0);
-        // Pair finding: x and the class byte per candidate; the record stored;
+        // Pair finding: x and the class byte per candidate read, its index and r² written;
+        // per pair the index and r² read back, r written and read, the record stored;
         // per stencil cell its range (two indices) and box (two corners), 18 flops in 3D.
-        assert_eq!(find::<3>(0.0, 0.0).bytes, 32.0);
+        assert_eq!(find::<3>(0.0, 0.0).bytes, (4 + 8 + 2 * 8 + 32) as f64);
         assert_eq!(
             find::<3>(1.0, 0.0).bytes - find::<3>(0.0, 0.0).bytes,
-            (3 * f + 1) as f64
+            (3 * f + 1 + 4 + 8) as f64
         );
         assert_eq!(find::<3>(1.0, 0.0).flops - find::<3>(0.0, 0.0).flops, 9.0);
         assert_eq!(find::<3>(0.0, 0.0).flops, 4.0 + 0.125 * 9.0 + 0.875 * 7.0);
