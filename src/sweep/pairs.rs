@@ -45,10 +45,37 @@ pub struct PairBlock {
     /// Start of the block's own slab (of its first partners).
     i_start: usize,
     i_end: usize,
-    groups: Vec<Vec<Pair>>,
+    groups: Vec<Group>,
     /// What each group's pairs reach below its first partners.
     reach: Vec<Reach>,
     len: usize,
+}
+
+/// The pairs of one group of [`GRAIN`] first partners (from `first` on), in order, and how
+/// many each of them has: the sums take a particle's pairs by its count instead of
+/// comparing every pair's first partner with the next one's (a pass over the pairs before
+/// each particle's run).
+struct Group {
+    first: u32,
+    pairs: Vec<Pair>,
+    counts: [u32; GRAIN],
+}
+
+impl Group {
+    /// Each first partner with pairs, and its pairs.
+    #[inline]
+    fn runs(&self) -> impl Iterator<Item = (usize, &[Pair])> {
+        let mut rest = &self.pairs[..];
+        self.counts
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| c > 0)
+            .map(move |(k, &c)| {
+                let (ps, tail) = rest.split_at(c as usize);
+                rest = tail;
+                (self.first as usize + k, ps)
+            })
+    }
 }
 
 /// The second partners of one group's pairs: those in the previous slab lie in
@@ -401,13 +428,14 @@ impl PairBlock {
         let pos = &local.pos;
         let stencil = half_stencil::<D>();
 
-        let (groups, reach): (Vec<Vec<Pair>>, Vec<Reach>) = (i_start..i_end)
+        let (groups, reach): (Vec<Group>, Vec<Reach>) = (i_start..i_end)
             .into_par_iter()
             .step_by(GRAIN)
             // One partner list per task of rayon's, reused by its groups.
             .map_init(Hits::default, |hits, g0| {
                 let g1 = (g0 + GRAIN).min(i_end);
                 let mut pairs = Vec::with_capacity(GROUP_CAPACITY.get());
+                let mut counts = [0u32; GRAIN];
                 let mut cells = StencilCells::new(local, &stencil);
                 for i in g0..g1 {
                     let c = local.cell[i];
@@ -428,6 +456,7 @@ impl PairBlock {
                     for r2 in rs.iter_mut() {
                         *r2 = r2.sqrt();
                     }
+                    counts[i - g0] = hits.n as u32;
                     // Stored with one capacity check for all of them.
                     pairs.extend(hits.j.iter().zip(rs.iter()).map(|(&j, &r)| {
                         let (w, f) = kernel.w_and_f(r);
@@ -445,11 +474,19 @@ impl PairBlock {
                 GROUP_CAPACITY.set(GROUP_CAPACITY.get().max(pairs.len() + pairs.len() / 4));
                 pairs.shrink_to_fit();
                 let reach = Reach::of(&pairs, g0, i_start);
-                (pairs, reach)
+                let first = g0 as u32;
+                (
+                    Group {
+                        first,
+                        pairs,
+                        counts,
+                    },
+                    reach,
+                )
             })
             .unzip();
 
-        let len = groups.iter().map(Vec::len).sum();
+        let len = groups.iter().map(|g| g.pairs.len()).sum();
         Self {
             slab,
             j_start,
@@ -471,7 +508,7 @@ impl PairBlock {
 
     /// Every pair, in order.
     pub fn pairs(&self) -> impl Iterator<Item = &Pair> {
-        self.groups.iter().flatten()
+        self.groups.iter().flat_map(|g| &g.pairs)
     }
 
     /// The groups cut into runs of at least `chunk` pairs (the last may be shorter), in
@@ -482,7 +519,7 @@ impl PairBlock {
         let mut out = Vec::new();
         let (mut first, mut count) = (0, 0);
         for (k, g) in self.groups.iter().enumerate() {
-            count += g.len();
+            count += g.pairs.len();
             if count >= chunk {
                 out.push(first..k + 1);
                 (first, count) = (k + 1, 0);
@@ -560,8 +597,7 @@ impl PairBlock {
                 buf[span.prev.clone()].fill(A::zero());
                 buf[span.cur.clone()].fill(A::zero());
                 for g in &b.groups[run] {
-                    for ps in g.chunk_by(|a, b| a.i == b.i) {
-                        let i = ps[0].i as usize;
+                    for (i, ps) in g.runs() {
                         let si = prep(i);
                         let mut acc = A::zero();
                         for p in ps {
@@ -910,7 +946,7 @@ mod tests {
                     let span = b.span(run.clone());
                     assert!(span.prev.end <= b.i_start - b.j_start);
                     assert!(span.cur.start >= b.i_start - b.j_start && span.cur.end <= n);
-                    for p in b.groups[run].iter().flatten() {
+                    for p in b.groups[run].iter().flat_map(|g| &g.pairs) {
                         for k in [p.i, p.j] {
                             assert!(span.covers(k as usize - b.j_start), "slab {slab}: {p:?}");
                         }
@@ -1021,6 +1057,31 @@ mod tests {
             assert_eq!(got, want);
             assert!(!want.is_empty());
         }
+    }
+
+    /// A group's counts cut its pairs into the runs of one first partner each, in order,
+    /// as comparing each pair's first partner with the next one's does (both leave out
+    /// the first partners without pairs).
+    #[test]
+    fn counts_cut_the_pairs_where_the_first_partner_changes() {
+        let (p, bx, h) = crate::bench::uniform_box(3000, 50.0, 3).unwrap();
+        let kernel = Kernel::<3>::new(h);
+        let local = Local::build(&p, &bx, kernel.support());
+        let mut runs_seen = 0;
+        for slab in 0..local.num_slabs() {
+            let b = PairBlock::find(&local, &kernel, slab);
+            for g in &b.groups {
+                let by_count: Vec<(usize, &[Pair])> = g.runs().collect();
+                let by_pair: Vec<(usize, &[Pair])> = g
+                    .pairs
+                    .chunk_by(|a, b| a.i == b.i)
+                    .map(|ps| (ps[0].i as usize, ps))
+                    .collect();
+                assert_eq!(by_count, by_pair, "slab {slab}, group from {}", g.first);
+                runs_seen += by_count.len();
+            }
+        }
+        assert!(runs_seen > 1000, "{runs_seen} runs");
     }
 
     #[test]
