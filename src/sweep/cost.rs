@@ -19,9 +19,9 @@
 //! partner list (every candidate is written; the list's length counts the partners); per
 //! pair found, the index and r² read back, r written over r² and read again, and the record
 //! stored (a group's list is shrunk where it lies, not copied). Sizes are taken from the
-//! types themselves, so the counts follow any change of them. Not counted: per-particle work (the first partner's
-//! fields and accumulator, zeroing and merging the per-task buffers, the finishing of
-//! slabs), and the growth of the per-thread pair vectors.
+//! types themselves, so the counts follow any change of them. Not counted: per-particle
+//! work (the first partner's fields and accumulator, zeroing and merging the per-task
+//! buffers, the finishing of slabs), and the growth of the per-thread pair vectors.
 
 use std::mem::size_of;
 
