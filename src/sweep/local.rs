@@ -56,6 +56,14 @@ pub mod class {
     pub fn pairs(a: u8, b: u8) -> bool {
         (a & b) == 0 && ((a | b) & NO_PAIR) == 0
     }
+
+    /// The bits a partner of class `a` must not have: `b` pairs with `a` when
+    /// `b & excluded(a) == 0` ([`pairs`] as one test per candidate). `None`: `a` pairs
+    /// with nothing.
+    #[inline]
+    pub fn excluded(a: u8) -> Option<u8> {
+        (a & NO_PAIR == 0).then_some(a | NO_PAIR)
+    }
 }
 
 /// No local owner: the particle is a copy of another rank's particle.
@@ -377,5 +385,20 @@ impl<const D: usize> Local<D> {
     #[inline]
     pub fn velocity(&self, k: usize) -> [f64; D] {
         std::array::from_fn(|d| self.vel[d][k])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::class;
+
+    #[test]
+    fn excluded_bits_give_the_same_pairs_as_the_class_rule() {
+        for a in 0..8u8 {
+            for b in 0..8u8 {
+                let by_mask = class::excluded(a).is_some_and(|m| b & m == 0);
+                assert_eq!(by_mask, class::pairs(a, b), "classes {a} and {b}");
+            }
+        }
     }
 }
