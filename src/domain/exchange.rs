@@ -249,6 +249,7 @@ impl<const D: usize> RankExchange<'_, D> {
             let x = &buf[n * len..(n + 1) * len];
             if k == DENSITY {
                 (l.rho[c], l.p[c], l.cs[c]) = (x[0], x[1], x[2]);
+                (l.vol[c], l.rho_inv[c]) = (l.mass[c] / x[0], 1.0 / x[0]);
             } else {
                 let s = l.sign[c];
                 for a in 0..D {

@@ -38,6 +38,9 @@ pub struct ForceSide<const D: usize> {
     /// [`av_velocity`]: crate::physics::artificial_viscosity::av_velocity
     pub v_av: [f64; D],
     pub rho: f64,
+    /// 1/ρ, stored per particle with ρ: the viscous terms take it without a division per
+    /// pair (read only with the physical viscosity).
+    pub rho_inv: f64,
     pub p: f64,
     pub cs: f64,
     /// The particle's factor on α: Balsara's factor times α_i/α_max with the
@@ -160,7 +163,7 @@ pub fn force_pair<const D: usize>(
         // force and heat are dot products of these: 72 flops per pair in 3D, where summing
         // (S_j/ρ_i + S_i/ρ_j)_αβ ∇_β W and S_αβ v_α ∇_β W entry by entry takes 114.
         let g: [f64; D] = std::array::from_fn(|d| f * dx[d]);
-        let (inv_i, inv_j) = (1.0 / i.rho, 1.0 / j.rho);
+        let (inv_i, inv_j) = (i.rho_inv, j.rho_inv);
         let (mut si_g, mut sj_g) = ([0.0; D], [0.0; D]);
         for a in 0..D {
             for b in 0..D {
@@ -191,6 +194,7 @@ mod tests {
             v,
             v_av: v,
             rho,
+            rho_inv: 1.0 / rho,
             p,
             cs: 1.0,
             av_scale: 1.0,

@@ -140,9 +140,11 @@ pub fn find<const D: usize>(candidates_per_pair: f64, cells_per_pair: f64) -> Pa
     let cell_bytes = size_of::<StencilCell<D>>();
     // r² = Σ (x_i − x_j)²: D subtractions, D products, D sums (from 0.0).
     let candidate_flops = 3.0 * D as f64;
-    // x and the class read; the index and r² written to the partner list.
+    // x and the class read; r² written and read back (the loop of distances, then the one
+    // picking the partners); the index and r² written to the partner list.
     let listed = size_of::<u32>() + size_of::<f64>();
-    let candidate_bytes = position::<D>() + field::<D, _>(|l| &l.class) + listed;
+    let candidate_bytes =
+        position::<D>() + field::<D, _>(|l| &l.class) + 2 * size_of::<f64>() + listed;
     let inner = 0.5f64.powi(D as i32);
     // q < 1: 1 − 1.5 q² + 0.75 q³ (5 ×, 2 ±) and −3 + 2.25 q (1 ×, 1 +);
     // 1 ≤ q < 2: t = 2 − q, 0.25 t³ (1 −, 3 ×) and −0.75 t²/q (2 ×, 1 ÷).
@@ -181,11 +183,10 @@ pub fn density<const D: usize>(s: &Setting) -> PairCost {
 /// Velocity gradient, Eq. (10).
 pub fn gradient<const D: usize>() -> PairCost {
     let d = D as f64;
-    // dx (D), v_j − v_i (D), (v_j − v_i) f (D), × dx (D²), m_j/ρ_j (1 ÷; the first
-    // partner's once per particle), scaled for both (2D²), added to both (2D²).
-    let flops = 3.0 * d + 5.0 * d * d + 1.0;
-    let side =
-        position::<D>() + velocity::<D>() + field::<D, _>(|l| &l.mass) + field::<D, _>(|l| &l.rho);
+    // dx (D), v_j − v_i (D), (v_j − v_i) f (D), × dx (D²), scaled by m/ρ for both (2D²;
+    // m/ρ is stored per particle with ρ), added to both (2D²).
+    let flops = 3.0 * d + 5.0 * d * d;
+    let side = position::<D>() + velocity::<D>() + field::<D, _>(|l| &l.vol);
     let acc = 2 * size_of::<[[f64; D]; D]>();
     PairCost {
         flops,
@@ -226,11 +227,11 @@ pub fn force<const D: usize>(s: &Setting) -> PairCost {
         flops += 1.0;
     }
     if s.viscous {
-        // g = f dx (D), 1/ρ both (2), S_i g and S_j g (4D²), v_ij (D); per axis
-        // S_j g/ρ_i + S_i g/ρ_j added to accel (4) and v_ij·S_i g, v_ij·S_j g summed (4);
-        // both heats (4).
-        flops += 10.0 * d + 6.0 + 4.0 * d * d;
-        side += field::<D, _>(|l| &l.stress);
+        // g = f dx (D), S_i g and S_j g (4D²), v_ij (D); per axis S_j g/ρ_i + S_i g/ρ_j
+        // added to accel (4) and v_ij·S_i g, v_ij·S_j g summed (4); both heats (4). 1/ρ
+        // is stored per particle with ρ.
+        flops += 10.0 * d + 4.0 + 4.0 * d * d;
+        side += field::<D, _>(|l| &l.stress) + field::<D, _>(|l| &l.rho_inv);
     }
     let acc = 2 * size_of::<ForceSum<D>>();
     PairCost {
@@ -287,35 +288,36 @@ mod tests {
             ..pe
         };
         assert_eq!(force::<3>(&both).bytes - force::<3>(&hydro).bytes, 8.0);
-        // Gradient: x, v, m, ρ of j; j's 3×3 gradient read and written.
-        assert_eq!(gradient::<3>().bytes, (32 + 8 * f + 2 * 9 * f) as f64);
-        assert_eq!(gradient::<3>().bytes, 240.0);
-        assert_eq!(gradient::<3>().flops, 55.0);
+        // Gradient: x, v, m/ρ of j; j's 3×3 gradient read and written.
+        assert_eq!(gradient::<3>().bytes, (32 + 7 * f + 2 * 9 * f) as f64);
+        assert_eq!(gradient::<3>().bytes, 232.0);
+        assert_eq!(gradient::<3>().flops, 54.0);
         // Force, the bench's hydro: x, v, m, ρ, p, c_s, α factor of j; j's a, du, diss, v_sig.
         assert_eq!(force::<3>(&hydro).bytes, (32 + 11 * f + 2 * 6 * f) as f64);
         assert_eq!(force::<3>(&hydro).bytes, 216.0);
         assert_eq!(force::<3>(&hydro).flops, 70.5);
-        // disk3d: plus v_av (3) and the stress (9) of j.
+        // disk3d: plus v_av (3), the stress (9) and 1/ρ of j.
         let disk = Setting {
             viscous: true,
             orbital: true,
             ..hydro
         };
-        assert_eq!(force::<3>(&disk).bytes, (32 + 23 * f + 2 * 6 * f) as f64);
-        assert_eq!(force::<3>(&disk).bytes, 312.0);
-        assert_eq!(force::<3>(&disk).flops, 142.5);
+        assert_eq!(force::<3>(&disk).bytes, (32 + 24 * f + 2 * 6 * f) as f64);
+        assert_eq!(force::<3>(&disk).bytes, 320.0);
+        assert_eq!(force::<3>(&disk).flops, 140.5);
         let cond = Setting {
             conductivity: true,
             ..hydro
         };
         assert_eq!(force::<3>(&cond).bytes - force::<3>(&hydro).bytes, 8.0);
-        // Pair finding: x and the class byte per candidate read, its index and r² written;
+        // Pair finding: x and the class byte per candidate read, r² written and read back,
+        // its index and r² written;
         // per pair the index and r² read back, r written and read, the record stored;
         // per stencil cell its range (two indices) and box (two corners), 18 flops in 3D.
         assert_eq!(find::<3>(0.0, 0.0).bytes, (4 + 8 + 2 * 8 + 32) as f64);
         assert_eq!(
             find::<3>(1.0, 0.0).bytes - find::<3>(0.0, 0.0).bytes,
-            (3 * f + 1 + 4 + 8) as f64
+            (3 * f + 1 + 2 * f + 4 + 8) as f64
         );
         assert_eq!(find::<3>(1.0, 0.0).flops - find::<3>(0.0, 0.0).flops, 9.0);
         assert_eq!(find::<3>(0.0, 0.0).flops, 4.0 + 0.125 * 9.0 + 0.875 * 7.0);

@@ -232,6 +232,10 @@ pub struct Local<const D: usize> {
     pub v_av: Vec<[f64; D]>,
     // Filled as the sweep finishes each stage of a slab (and copied to ghosts).
     pub rho: Vec<f64>,
+    /// m/ρ, the particle's volume (Eq. 10's weight), and 1/ρ (the viscous force's), set
+    /// with ρ: a load per pair in the sums instead of a division.
+    pub vol: Vec<f64>,
+    pub rho_inv: Vec<f64>,
     pub p: Vec<f64>,
     pub cs: Vec<f64>,
     /// Each particle's factor on the artificial viscosity's α: α_i/α_max from the
@@ -327,6 +331,8 @@ impl<const D: usize> Local<D> {
             real_at,
             v_av: Vec::new(),
             rho: filled(0.0),
+            vol: filled(0.0),
+            rho_inv: filled(0.0),
             p: filled(0.0),
             cs: filled(0.0),
             av_scale: filled(1.0),

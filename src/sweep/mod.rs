@@ -635,6 +635,8 @@ fn finish_slab<const D: usize>(
         match stage {
             DENSITY => {
                 local.rho[g] = local.rho[o];
+                local.vol[g] = local.mass[g] / local.rho[g];
+                local.rho_inv[g] = local.rho_inv[o];
                 local.p[g] = local.p[o];
                 local.cs[g] = local.cs[o];
             }
@@ -674,11 +676,13 @@ fn finish_reals<const D: usize>(
             let (mass, u) = (&local.mass[start..end], &local.u[start..end]);
             local.rho[start..end]
                 .par_iter_mut()
+                .zip(local.vol[start..end].par_iter_mut())
+                .zip(local.rho_inv[start..end].par_iter_mut())
                 .zip(local.p[start..end].par_iter_mut())
                 .zip(local.cs[start..end].par_iter_mut())
                 .enumerate()
                 .with_min_len(GRAIN)
-                .for_each(|(o, ((rho_k, p_k), cs_k))| {
+                .for_each(|(o, ((((rho_k, vol_k), inv_k), p_k), cs_k))| {
                     if is_ghost[o] {
                         return;
                     }
@@ -698,6 +702,7 @@ fn finish_reals<const D: usize>(
                         }
                     };
                     (*rho_k, *p_k, *cs_k) = (rho, p, cs);
+                    (*vol_k, *inv_k) = (mass[o] / rho, 1.0 / rho);
                 });
         }
         GRADIENT => {

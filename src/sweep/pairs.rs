@@ -757,13 +757,13 @@ impl PairBlock {
             (crate::sweep::GRADIENT, pair_stage, held),
             |i| {
                 let x: [f64; D] = std::array::from_fn(|d| local.pos[d][i]);
-                (x, local.velocity(i), local.mass[i] / local.rho[i])
+                (x, local.velocity(i), local.vol[i])
             },
             |(xi, vi, sj), p| {
                 let j = p.j as usize;
                 let dx: [f64; D] = std::array::from_fn(|d| xi[d] - local.pos[d][j]);
                 let g = gradient_pair(&dx, p.f, vi, &local.velocity(j));
-                let (si, sj) = (local.mass[j] / local.rho[j], *sj);
+                let (si, sj) = (local.vol[j], *sj);
                 let scale = |s: f64| -> [[f64; D]; D] {
                     std::array::from_fn(|a| std::array::from_fn(|b| s * g[a][b]))
                 };
@@ -823,6 +823,7 @@ impl PairBlock {
                 v,
                 v_av: if ORBITAL { local.v_av[k] } else { v },
                 rho: local.rho[k],
+                rho_inv: if VISCOUS { local.rho_inv[k] } else { 0.0 },
                 p: local.p[k],
                 cs: local.cs[k],
                 av_scale: local.av_scale[k],
@@ -1066,7 +1067,7 @@ mod tests {
                 hits.clear();
                 let mut want = Vec::new();
                 for r in ranges.iter().skip(round) {
-                    hits.gather(&pos, &classes, xi, excluded, r.clone(), support2);
+                    hits.gather(&pos, classes, xi, excluded, r.clone(), support2);
                     for k in r.clone() {
                         let r2 = (xi[0] - xs[k]).powi(2);
                         if r2 < support2 && class::pairs(ci, classes[k]) {

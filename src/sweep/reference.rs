@@ -152,6 +152,7 @@ pub fn full_list_minimum_image<const D: usize>(
             parts.velocity(k),
         ),
         rho: parts.rho[k],
+        rho_inv: 1.0 / parts.rho[k],
         p: parts.p[k],
         cs: parts.cs[k],
         av_scale: av_scale[k],
