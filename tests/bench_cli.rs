@@ -63,12 +63,13 @@ fn bench_writes_a_consistent_csv_of_thread_scaling() {
         // Run one after another, every step is timed.
         assert_eq!(col(row, "untimed_steps"), "0");
         assert!(f("pairs_per_second_per_core") * f("threads") <= f("pairs_per_second") * 1.000001);
-        // Bytes moved per pair (sphdisk::sweep::cost): the three sums' fixed 528 B (72 + 240
+        // Bytes moved per pair (sphdisk::sweep::cost): the three sums' fixed 520 B (72 + 232
         // + 216: the record, the second partner's fields and accumulator), and pair
         // finding's 60 B per pair (the partner list's index and r² read back, r written and
-        // read, the record stored) plus 37 B per candidate tested (x and class read, index
-        // and r² listed) and 64 B per stencil-cell box tested.
-        let bytes = 588.0 + 37.0 * f("candidates_per_pair") + 64.0 * f("cells_per_pair");
+        // read, the record stored) plus 53 B per candidate tested (x and class read, r²
+        // written and read back between the two loops, index and r² listed) and 64 B per
+        // stencil-cell box tested.
+        let bytes = 580.0 + 53.0 * f("candidates_per_pair") + 64.0 * f("cells_per_pair");
         assert!((f("bytes_per_pair") - bytes).abs() < 0.01, "{row}");
         assert!(
             f("flops_per_pair") > 0.0
