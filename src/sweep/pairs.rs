@@ -890,14 +890,18 @@ pub struct Tested {
 }
 
 /// What pair finding tests over the whole working set ([`PairBlock::find`]'s loops): for
-/// each particle, the box of every occupied cell of its half stencil, and as candidates the
-/// particles below it in its own cell and those of the stencil cells within the support's
-/// reach. Over the pairs found, what each pair costs ([`crate::sweep::cost`]).
+/// each particle that pairs at all ([`class::excluded`]), the box of every occupied cell of
+/// its half stencil, and as candidates the particles below it in its own cell and those of
+/// the stencil cells within the support's reach. Over the pairs found, what each pair
+/// costs ([`crate::sweep::cost`]).
 pub fn candidates<const D: usize>(local: &Local<D>, support: f64) -> Tested {
     let stencil = half_stencil::<D>();
     let mut cells = StencilCells::new(local, &stencil);
     let mut total = Tested::default();
     for i in 0..local.len() {
+        if class::excluded(local.class[i]).is_none() {
+            continue;
+        }
         let c = local.cell[i];
         cells.set_cell(local, c);
         let x = local.position(i);
@@ -1144,6 +1148,32 @@ mod tests {
         // candidates per pair within the sphere.
         let ratio = c as f64 / pairs as f64;
         assert!((3.0..20.0).contains(&ratio), "{ratio}");
+    }
+
+    /// Particles that pair with nothing (`class::NO_PAIR`: every pair of theirs is another
+    /// rank's) are skipped by pair finding before any candidate or cell box is tested, and
+    /// the count of what it tests skips them alike.
+    #[test]
+    fn particles_pairing_with_nothing_test_no_candidates() {
+        let (p, bx, h) = crate::bench::uniform_box(4000, 50.0, 3).unwrap();
+        let kernel = Kernel::<3>::new(h);
+        let mut local = Local::build(&p, &bx, kernel.support());
+        let all = candidates(&local, kernel.support());
+        // Every other particle in cell order marked as lying in a lower rank's region.
+        for k in (0..local.len()).step_by(2) {
+            local.class[k] |= class::NO_PAIR;
+        }
+        let found: usize = (0..local.num_slabs())
+            .map(|s| PairBlock::find(&local, &kernel, s).pairs().count())
+            .sum();
+        let some = candidates(&local, kernel.support());
+        assert!(found > 0);
+        assert!(some.cells < all.cells && some.candidates < all.candidates);
+        for k in 0..local.len() {
+            local.class[k] |= class::NO_PAIR;
+        }
+        let none = candidates(&local, kernel.support());
+        assert_eq!(none, Tested::default());
     }
 
     /// Skipping the stencil cells beyond the support saves the edge and corner cells'
