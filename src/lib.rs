@@ -12,6 +12,7 @@ pub mod grid;
 pub mod integrate;
 pub mod io;
 pub mod kernel;
+pub mod lanes;
 pub mod limits;
 pub mod memory;
 pub mod particles;

@@ -4,6 +4,7 @@
 //! Also the artificial conductivity of the energy equation (Price 2008), off by default, and
 //! the choice of a per-particle α (the Morris & Monaghan switch, `physics::av_switch`).
 
+use crate::lanes::Real;
 use serde::{Deserialize, Serialize};
 
 use crate::physics::av_switch::{AvSwitch, SwitchKind};
@@ -200,28 +201,29 @@ impl ArtificialViscosity {
     /// (Π_ij, v_sig,ij) for a pair with v_ij·r_ij = `vdotr` at separation `r`.
     /// `scale` is the pair's mean of the particles' factors on α: Balsara's factor times
     /// α_i/α_max with the switch (1 with neither), so that α_ij = ½ (α_i + α_j).
-    #[inline]
-    pub fn pi(
+    /// Over [`Real`]: one pair (`f64`) or several in lanes, the same to the bit.
+    #[inline(always)]
+    pub fn pi<T: Real>(
         &self,
-        vdotr: f64,
-        r: f64,
-        (ci, cj): (f64, f64),
-        (rhoi, rhoj): (f64, f64),
-        scale: f64,
-    ) -> (f64, f64) {
-        let w = if r > 0.0 { vdotr / r } else { 0.0 };
-        // A comparison rather than `f64::min` (the same for every w, NaN included: both
+        vdotr: T,
+        r: T,
+        (ci, cj): (T, T),
+        (rhoi, rhoj): (T, T),
+        scale: T,
+    ) -> (T, T) {
+        let w = r.where_positive(vdotr / r);
+        // A selection rather than `f64::min` (the same for every w, NaN included: both
         // give 0) and Π computed for every pair, then selected: pairs approach at random,
         // and a branch on it is mispredicted about every other pair.
-        let approach = if w < 0.0 { w } else { 0.0 };
-        let vsig = ci + cj - self.beta.max(1.0) * approach;
-        let vsig_av = ci + cj - self.beta * approach;
-        let pi = -self.alpha * vsig_av * approach / (rhoi + rhoj) * scale;
+        let approach = w.where_negative(w);
+        let vsig = ci + cj - T::splat(self.beta.max(1.0)) * approach;
+        let vsig_av = ci + cj - T::splat(self.beta) * approach;
+        let pi = T::splat(-self.alpha) * vsig_av * approach / (rhoi + rhoj) * scale;
         (
-            if approach < 0.0 && self.alpha > 0.0 {
-                pi
+            if self.alpha > 0.0 {
+                approach.where_negative(pi)
             } else {
-                0.0
+                T::splat(0.0)
             },
             vsig,
         )

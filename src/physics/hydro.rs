@@ -9,6 +9,7 @@
 //! 3. right-hand sides, Eq. (7), physical viscosity Eq. (8), and the energy equation:
 //!    [`force_pair`].
 
+use crate::lanes::{F64x2, Real};
 use crate::physics::artificial_viscosity::ArtificialViscosity;
 use crate::physics::pressure_energy::pair_weights;
 
@@ -28,30 +29,70 @@ pub fn gradient_pair<const D: usize>(
     })
 }
 
-/// What the force sum needs of one partner.
+/// What the force sum needs of one partner: `T = f64` for one pair, a [`Real`] with lanes
+/// for several pairs' partners side by side.
 #[derive(Clone, Copy, Debug)]
-pub struct ForceSide<const D: usize> {
-    pub v: [f64; D],
+pub struct ForceSide<const D: usize, T: Real = f64> {
+    pub v: [T; D],
     /// The velocity the artificial viscosity measures ([`av_velocity`]): `v`, or `v`
     /// relative to the circular orbit at the particle's position.
     ///
     /// [`av_velocity`]: crate::physics::artificial_viscosity::av_velocity
-    pub v_av: [f64; D],
-    pub rho: f64,
+    pub v_av: [T; D],
+    pub rho: T,
     /// 1/ρ, stored per particle with ρ: the viscous terms take it without a division per
     /// pair (read only with the physical viscosity).
-    pub rho_inv: f64,
-    pub p: f64,
-    pub cs: f64,
+    pub rho_inv: T,
+    pub p: T,
+    pub cs: T,
     /// The particle's factor on α: Balsara's factor times α_i/α_max with the
     /// Morris–Monaghan switch (1 with neither).
-    pub av_scale: f64,
+    pub av_scale: T,
     /// Viscous stress S = ν σ (Eq. 9, plus bulk part); zero without physical viscosity.
-    pub stress: [[f64; D]; D],
+    pub stress: [[T; D]; D],
     /// Specific internal energy (for the artificial conductivity).
-    pub u: f64,
+    pub u: T,
     /// (γ − 1) u with the pressure–energy formulation (`p` is then p̄); unused otherwise.
-    pub y: f64,
+    pub y: T,
+}
+
+impl<const D: usize> ForceSide<D> {
+    /// The same side in every lane of `T`.
+    #[inline(always)]
+    pub fn splat<T: Real>(&self) -> ForceSide<D, T> {
+        ForceSide {
+            v: self.v.map(T::splat),
+            v_av: self.v_av.map(T::splat),
+            rho: T::splat(self.rho),
+            rho_inv: T::splat(self.rho_inv),
+            p: T::splat(self.p),
+            cs: T::splat(self.cs),
+            av_scale: T::splat(self.av_scale),
+            stress: self.stress.map(|row| row.map(T::splat)),
+            u: T::splat(self.u),
+            y: T::splat(self.y),
+        }
+    }
+
+    /// `a` in lane 0, `b` in lane 1: two partners side by side.
+    #[inline(always)]
+    pub fn zip(a: &Self, b: &Self) -> ForceSide<D, F64x2> {
+        let z = |x: f64, y: f64| F64x2::new(x, y);
+        ForceSide {
+            v: std::array::from_fn(|d| z(a.v[d], b.v[d])),
+            v_av: std::array::from_fn(|d| z(a.v_av[d], b.v_av[d])),
+            rho: z(a.rho, b.rho),
+            rho_inv: z(a.rho_inv, b.rho_inv),
+            p: z(a.p, b.p),
+            cs: z(a.cs, b.cs),
+            av_scale: z(a.av_scale, b.av_scale),
+            stress: std::array::from_fn(|r| {
+                std::array::from_fn(|c| z(a.stress[r][c], b.stress[r][c]))
+            }),
+            u: z(a.u, b.u),
+            y: z(a.y, b.y),
+        }
+    }
 }
 
 /// Which terms a pair evaluation includes.
@@ -70,19 +111,19 @@ pub struct PairTerms {
 /// conservation), and the work and heat terms add up to minus the pair's change of kinetic
 /// energy, so d(E_kin + E_int)/dt = 0 exactly.
 #[derive(Clone, Copy, Debug)]
-pub struct PairForce<const D: usize> {
-    pub accel: [f64; D],
+pub struct PairForce<const D: usize, T: Real = f64> {
+    pub accel: [T; D],
     /// p_i/(ρ_i ρ_j) v_ij·∇_i W_ij: particle i's share of the pressure work, plus the heat
     /// conducted to i (artificial conductivity; −m_i/m_j times j's share, so it adds no
     /// energy).
-    pub work_i: f64,
+    pub work_i: T,
     /// p_j/(ρ_i ρ_j) v_ij·∇_i W_ij.
-    pub work_j: f64,
+    pub work_j: T,
     /// Dissipation at i: ½ Π_ij v_ij·∇_i W_ij (artificial, shared equally) plus
     /// −S_i : (v_ij ⊗ ∇_i W_ij) / ρ_j (physical, with i's own stress).
-    pub heat_i: f64,
-    pub heat_j: f64,
-    pub vsig: f64,
+    pub heat_i: T,
+    pub heat_j: T,
+    pub vsig: T,
 }
 
 /// Eq. (7) with Monaghan's artificial viscosity Π_ij:
@@ -109,21 +150,25 @@ pub struct PairForce<const D: usize> {
 /// v_sig,u = √(|p_i − p_j| / ρ̄_ij) (or |v_ij·r̂_ij|, `av.conductivity_signal`),
 /// ρ̄_ij = (ρ_i + ρ_j)/2; j gets the opposite, so the pair
 /// exchanges heat without changing the total energy.
+///
+/// Over [`Real`]: `T = f64` for one pair, [`crate::lanes::F64x2`] for two pairs at once
+/// with, lane by lane, the same results to the bit.
 #[inline(always)]
-pub fn force_pair<const D: usize>(
-    dx: &[f64; D],
-    r: f64,
-    f: f64,
-    i: &ForceSide<D>,
-    j: &ForceSide<D>,
+pub fn force_pair<const D: usize, T: Real>(
+    dx: &[T; D],
+    r: T,
+    f: T,
+    i: &ForceSide<D, T>,
+    j: &ForceSide<D, T>,
     av: &ArtificialViscosity,
     terms: PairTerms,
-) -> PairForce<D> {
-    let mut vdotr = 0.0;
+) -> PairForce<D, T> {
+    let zero = T::splat(0.0);
+    let mut vdotr = zero;
     for d in 0..D {
         vdotr += (i.v[d] - j.v[d]) * dx[d];
     }
-    let mut vdotr_av = 0.0;
+    let mut vdotr_av = zero;
     for d in 0..D {
         vdotr_av += (i.v_av[d] - j.v_av[d]) * dx[d];
     }
@@ -132,17 +177,18 @@ pub fn force_pair<const D: usize>(
         r,
         (i.cs, j.cs),
         (i.rho, j.rho),
-        0.5 * (i.av_scale + j.av_scale),
+        T::splat(0.5) * (i.av_scale + j.av_scale),
     );
     let (pterm, work_i, work_j) = if terms.pressure_energy {
-        let (a_i, a_j) = pair_weights(i.y, i.p, j.y, j.p);
+        let (a_i, a_j) =
+            T::from_fn2(|l| pair_weights(i.y.lane(l), i.p.lane(l), j.y.lane(l), j.p.lane(l)));
         (a_i + a_j, a_i * f * vdotr, a_j * f * vdotr)
     } else {
         let gv = f * vdotr / (i.rho * j.rho);
         ((i.p + j.p) / (i.rho * j.rho), i.p * gv, j.p * gv)
     };
     let coef = -(pterm + pi) * f;
-    let heat_av = 0.5 * pi * f * vdotr;
+    let heat_av = T::splat(0.5) * pi * f * vdotr;
     let mut out = PairForce {
         accel: std::array::from_fn(|d| coef * dx[d]),
         work_i,
@@ -152,9 +198,17 @@ pub fn force_pair<const D: usize>(
         vsig,
     };
     if av.conductivity > 0.0 {
-        let rho_mean = 0.5 * (i.rho + j.rho);
-        let vsig_u = av.conductivity_signal.speed(i.p, j.p, rho_mean, vdotr, r);
-        let cond = av.conductivity * vsig_u * (i.u - j.u) * f * r / rho_mean;
+        let rho_mean = T::splat(0.5) * (i.rho + j.rho);
+        let vsig_u = T::from_fn(|l| {
+            av.conductivity_signal.speed(
+                i.p.lane(l),
+                j.p.lane(l),
+                rho_mean.lane(l),
+                vdotr.lane(l),
+                r.lane(l),
+            )
+        });
+        let cond = T::splat(av.conductivity) * vsig_u * (i.u - j.u) * f * r / rho_mean;
         out.work_i += cond;
         out.work_j -= cond;
     }
@@ -162,16 +216,16 @@ pub fn force_pair<const D: usize>(
         // With the stresses applied to ∇_i W_ij first, S_i·∇W and S_j·∇W, each partner's
         // force and heat are dot products of these: 72 flops per pair in 3D, where summing
         // (S_j/ρ_i + S_i/ρ_j)_αβ ∇_β W and S_αβ v_α ∇_β W entry by entry takes 114.
-        let g: [f64; D] = std::array::from_fn(|d| f * dx[d]);
+        let g: [T; D] = std::array::from_fn(|d| f * dx[d]);
         let (inv_i, inv_j) = (i.rho_inv, j.rho_inv);
-        let (mut si_g, mut sj_g) = ([0.0; D], [0.0; D]);
+        let (mut si_g, mut sj_g) = ([zero; D], [zero; D]);
         for a in 0..D {
             for b in 0..D {
                 si_g[a] += i.stress[a][b] * g[b];
                 sj_g[a] += j.stress[a][b] * g[b];
             }
         }
-        let (mut si_vg, mut sj_vg) = (0.0, 0.0);
+        let (mut si_vg, mut sj_vg) = (zero, zero);
         for a in 0..D {
             let va = i.v[a] - j.v[a];
             out.accel[a] += sj_g[a] * inv_i + si_g[a] * inv_j;
@@ -208,6 +262,105 @@ mod tests {
         viscous: false,
         pressure_energy: false,
     };
+
+    /// A partner in 3D with every field drawn at random (p ≥ 0, ρ > 0).
+    fn random_side(rng: &mut crate::rng::Rng) -> ForceSide<3> {
+        let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform();
+        let rho = u(0.2, 3.0);
+        let p = if u(0.0, 1.0) < 0.1 { 0.0 } else { u(0.0, 2.0) };
+        ForceSide {
+            v: [u(-1.0, 1.0), u(-1.0, 1.0), u(-1.0, 1.0)],
+            v_av: [u(-1.0, 1.0), u(-1.0, 1.0), u(-1.0, 1.0)],
+            rho,
+            rho_inv: 1.0 / rho,
+            p,
+            cs: u(0.1, 2.0),
+            av_scale: u(0.0, 1.0),
+            stress: std::array::from_fn(|_| std::array::from_fn(|_| u(-0.5, 0.5))),
+            u: u(0.1, 3.0),
+            y: u(0.0, 2.0),
+        }
+    }
+
+    fn bits<const D: usize>(pf: &PairForce<D>) -> Vec<u64> {
+        let mut out: Vec<u64> = pf.accel.iter().map(|a| a.to_bits()).collect();
+        out.extend([pf.work_i, pf.work_j, pf.heat_i, pf.heat_j, pf.vsig].map(f64::to_bits));
+        out
+    }
+
+    fn lane<const D: usize>(pf: &PairForce<D, F64x2>, l: usize) -> PairForce<D> {
+        PairForce {
+            accel: pf.accel.map(|a| a.lane(l)),
+            work_i: pf.work_i.lane(l),
+            work_j: pf.work_j.lane(l),
+            heat_i: pf.heat_i.lane(l),
+            heat_j: pf.heat_j.lane(l),
+            vsig: pf.vsig.lane(l),
+        }
+    }
+
+    /// The force sum takes its pairs two at a time in the lanes of `F64x2`: each lane must
+    /// be the scalar evaluation of its pair to the bit, with every term on, for
+    /// approaching and receding pairs, zero pressures and a pair at zero distance.
+    #[test]
+    fn force_pair_in_lanes_is_the_scalar_force_to_the_bit() {
+        use crate::physics::artificial_viscosity::ConductivitySignal;
+        let mut rng = crate::rng::Rng::new(7);
+        let k = Kernel::<3>::new(0.5);
+        let mut avs = Vec::new();
+        for (alpha, conductivity, signal) in [
+            (1.0, 0.0, ConductivitySignal::Pressure),
+            (0.0, 0.0, ConductivitySignal::Pressure),
+            (1.0, 1.0, ConductivitySignal::Pressure),
+            (0.5, 0.7, ConductivitySignal::Velocity),
+        ] {
+            avs.push(ArtificialViscosity {
+                alpha,
+                beta: 2.0 * alpha,
+                conductivity,
+                conductivity_signal: signal,
+                ..ArtificialViscosity::default()
+            });
+        }
+        let mut compared = 0;
+        for trial in 0..400 {
+            let i = random_side(&mut rng);
+            let (j0, j1) = (random_side(&mut rng), random_side(&mut rng));
+            let dx: [[f64; 3]; 2] = std::array::from_fn(|l| {
+                if trial % 50 == 0 && l == 1 {
+                    [0.0; 3]
+                } else {
+                    std::array::from_fn(|_| 0.6 * rng.uniform() - 0.3)
+                }
+            });
+            let r = dx.map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+            let f = r.map(|r| k.f(r));
+            let dx2: [F64x2; 3] = std::array::from_fn(|d| F64x2::new(dx[0][d], dx[1][d]));
+            let (r2, f2) = (F64x2::new(r[0], r[1]), F64x2::new(f[0], f[1]));
+            let (si, sj) = (i.splat::<F64x2>(), ForceSide::zip(&j0, &j1));
+            for av in &avs {
+                for (viscous, pressure_energy) in
+                    [(false, false), (true, false), (false, true), (true, true)]
+                {
+                    let terms = PairTerms {
+                        viscous,
+                        pressure_energy,
+                    };
+                    let both = force_pair(&dx2, r2, f2, &si, &sj, av, terms);
+                    for (l, j) in [j0, j1].iter().enumerate() {
+                        let one = force_pair(&dx[l], r[l], f[l], &i, j, av, terms);
+                        assert_eq!(
+                            bits(&lane(&both, l)),
+                            bits(&one),
+                            "lane {l}, trial {trial}, {terms:?}, {av:?}"
+                        );
+                        compared += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(compared, 400 * 4 * 4 * 2);
+    }
 
     #[test]
     fn pair_force_conserves_momentum_and_energy() {

@@ -6,7 +6,8 @@
 use rayon::prelude::*;
 
 use crate::kernel::Kernel;
-use crate::physics::hydro::{ForceSide, PairTerms, force_pair, gradient_pair};
+use crate::lanes::{F64x2, Real};
+use crate::physics::hydro::{ForceSide, PairForce, PairTerms, force_pair, gradient_pair};
 use crate::sweep::Physics;
 use crate::sweep::local::{Local, Work, class};
 
@@ -315,6 +316,48 @@ trait Accumulator: Copy + Send + Sync {
     fn add(&mut self, o: &Self);
 }
 
+/// A sum's two terms for a pair: (first partner's, second partner's), computed one pair at a
+/// time, or with `TWO` two pairs of the same first partner at once (lanes). `two` must give
+/// for each pair what `one` gives, to the bit: the terms are then added in the same order
+/// either way.
+trait PairSum<S, A>: Sync {
+    const TWO: bool = false;
+    fn one(&self, s: &S, p: &Pair) -> (A, A);
+    #[inline(always)]
+    fn two(&self, s: &S, p: &Pair, q: &Pair) -> [(A, A); 2] {
+        [self.one(s, p), self.one(s, q)]
+    }
+}
+
+/// A sum computed one pair at a time by a closure.
+struct Each<F>(F);
+
+impl<S, A, F: Fn(&S, &Pair) -> (A, A) + Sync> PairSum<S, A> for Each<F> {
+    #[inline(always)]
+    fn one(&self, s: &S, p: &Pair) -> (A, A) {
+        (self.0)(s, p)
+    }
+}
+
+/// A sum with a closure for one pair and one for two pairs at once.
+struct InTwos<F, G>(F, G);
+
+impl<S, A, F, G> PairSum<S, A> for InTwos<F, G>
+where
+    F: Fn(&S, &Pair) -> (A, A) + Sync,
+    G: Fn(&S, &Pair, &Pair) -> [(A, A); 2] + Sync,
+{
+    const TWO: bool = true;
+    #[inline(always)]
+    fn one(&self, s: &S, p: &Pair) -> (A, A) {
+        (self.0)(s, p)
+    }
+    #[inline(always)]
+    fn two(&self, s: &S, p: &Pair, q: &Pair) -> [(A, A); 2] {
+        (self.1)(s, p, q)
+    }
+}
+
 impl Accumulator for (f64, u32) {
     fn zero() -> Self {
         (0.0, 0)
@@ -361,13 +404,46 @@ impl Accumulator for DensitySum {
     }
 }
 
-/// Force-stage sums: acceleration, du/dt, viscous heating, largest signal velocity.
+/// Force-stage sums: acceleration, du/dt, viscous heating, largest signal velocity (`T`
+/// with lanes: several pairs' terms side by side).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct ForceSum<const D: usize> {
-    acc: [f64; D],
-    du: f64,
-    diss: f64,
-    vsig: f64,
+pub(crate) struct ForceSum<const D: usize, T: Real = f64> {
+    acc: [T; D],
+    du: T,
+    diss: T,
+    vsig: T,
+}
+
+impl<const D: usize, T: Real> ForceSum<D, T> {
+    /// The two partners' terms of a pair (or pairs, lane by lane) with masses `mi`, `mj`.
+    #[inline(always)]
+    fn of_pair(pf: &PairForce<D, T>, mi: T, mj: T) -> [Self; 2] {
+        [
+            ForceSum {
+                acc: std::array::from_fn(|d| mj * pf.accel[d]),
+                du: mj * (pf.work_i + pf.heat_i),
+                diss: mj * pf.heat_i,
+                vsig: pf.vsig,
+            },
+            ForceSum {
+                acc: std::array::from_fn(|d| -mi * pf.accel[d]),
+                du: mi * (pf.work_j + pf.heat_j),
+                diss: mi * pf.heat_j,
+                vsig: pf.vsig,
+            },
+        ]
+    }
+
+    /// Lane `l`'s terms.
+    #[inline(always)]
+    fn lane(&self, l: usize) -> ForceSum<D> {
+        ForceSum {
+            acc: self.acc.map(|a| a.lane(l)),
+            du: self.du.lane(l),
+            diss: self.diss.lane(l),
+            vsig: self.vsig.lane(l),
+        }
+    }
 }
 
 impl<const D: usize> Accumulator for ForceSum<D> {
@@ -586,7 +662,9 @@ impl PairBlock {
     /// once for all of them, and its own terms are added up in `acc` and stored once. Its
     /// buffer entry is still zero when they are (its pairs as second partner come later,
     /// from larger first partners), so the sum is the same to the bit as adding each term
-    /// into the buffer.
+    /// into the buffer. A sum that computes two pairs at once ([`PairSum::TWO`], the force
+    /// sum in SIMD lanes) takes a particle's pairs two by two and the odd one alone, and
+    /// adds their terms in the same order as one at a time.
     fn scatter<const D: usize, S, A, P, F, M>(
         blocks: &[&PairBlock],
         work: &mut [Work<D>],
@@ -597,7 +675,7 @@ impl PairBlock {
     ) where
         A: Accumulator + 'static,
         P: Fn(usize) -> S + Sync,
-        F: Fn(&S, &Pair) -> (A, A) + Sync,
+        F: PairSum<S, A>,
         M: Fn(&mut Work<D>, &A) + Sync,
     {
         let tasks = rayon::current_num_threads().max(1);
@@ -616,8 +694,20 @@ impl PairBlock {
                     for (i, ps) in g.runs() {
                         let si = prep(i);
                         let mut acc = A::zero();
-                        for p in ps {
-                            let (ci, cj) = f(&si, p);
+                        let mut rest = ps;
+                        if F::TWO {
+                            let mut twos = ps.chunks_exact(2);
+                            for c in &mut twos {
+                                let [(ci, cj), (ck, cl)] = f.two(&si, &c[0], &c[1]);
+                                acc.add(&ci);
+                                buf[c[0].j as usize - b.j_start].add(&cj);
+                                acc.add(&ck);
+                                buf[c[1].j as usize - b.j_start].add(&cl);
+                            }
+                            rest = twos.remainder();
+                        }
+                        for p in rest {
+                            let (ci, cj) = f.one(&si, p);
                             acc.add(&ci);
                             buf[p.j as usize - b.j_start].add(&cj);
                         }
@@ -707,7 +797,7 @@ impl PairBlock {
                 work,
                 order,
                 |i| (m[i], u[i]),
-                |&(m_i, u_i), p| {
+                Each(|&(m_i, u_i): &(f64, f64), p: &Pair| {
                     let j = p.j as usize;
                     let (mwi, mwj) = (m_i * p.w, m[j] * p.w);
                     (
@@ -722,7 +812,7 @@ impl PairBlock {
                             n: 1,
                         },
                     )
-                },
+                }),
                 |wk, a: &DensitySum| {
                     wk.rho += a.rho;
                     wk.mu_w += a.mu_w;
@@ -736,7 +826,7 @@ impl PairBlock {
             work,
             order,
             |i| m[i],
-            |&m_i, p| ((m[p.j as usize] * p.w, 1u32), (m_i * p.w, 1u32)),
+            Each(|&m_i: &f64, p: &Pair| ((m[p.j as usize] * p.w, 1u32), (m_i * p.w, 1u32))),
             |wk, a: &(f64, u32)| {
                 wk.rho += a.0;
                 wk.interactions += a.1;
@@ -759,7 +849,7 @@ impl PairBlock {
                 let x: [f64; D] = std::array::from_fn(|d| local.pos[d][i]);
                 (x, local.velocity(i), local.vol[i])
             },
-            |(xi, vi, sj), p| {
+            Each(|(xi, vi, sj): &([f64; D], [f64; D], f64), p: &Pair| {
                 let j = p.j as usize;
                 let dx: [f64; D] = std::array::from_fn(|d| xi[d] - local.pos[d][j]);
                 let g = gradient_pair(&dx, p.f, vi, &local.velocity(j));
@@ -768,7 +858,7 @@ impl PairBlock {
                     std::array::from_fn(|a| std::array::from_fn(|b| s * g[a][b]))
                 };
                 (scale(si), scale(sj))
-            },
+            }),
             |wk, g: &[[f64; D]; D]| wk.grad.add(g),
         );
     }
@@ -836,6 +926,8 @@ impl PairBlock {
                 y: if pressure_energy { y_factor * u } else { 0.0 },
             }
         }
+        /// A first partner: position, force side (alone and in both lanes), mass.
+        type Prepared<const D: usize> = ([f64; D], ForceSide<D>, f64, ForceSide<D, F64x2>);
         let reads = (need_u, terms.pressure_energy, y_factor);
         let side = |k: usize| side::<D, VISCOUS, ORBITAL>(local, k, reads);
         let av = &phys.av;
@@ -846,28 +938,32 @@ impl PairBlock {
             (crate::sweep::FORCE, pair_stage, held),
             |i| {
                 let x: [f64; D] = std::array::from_fn(|d| local.pos[d][i]);
-                (x, side(i), m[i])
+                let s = side(i);
+                (x, s, m[i], s.splat::<F64x2>())
             },
-            |(xi, side_i, mi), p| {
-                let j = p.j as usize;
-                let dx: [f64; D] = std::array::from_fn(|d| xi[d] - local.pos[d][j]);
-                let pf = force_pair(&dx, p.r, p.f, side_i, &side(j), av, terms);
-                let (mi, mj) = (*mi, m[j]);
-                (
-                    ForceSum {
-                        acc: std::array::from_fn(|d| mj * pf.accel[d]),
-                        du: mj * (pf.work_i + pf.heat_i),
-                        diss: mj * pf.heat_i,
-                        vsig: pf.vsig,
-                    },
-                    ForceSum {
-                        acc: std::array::from_fn(|d| -mi * pf.accel[d]),
-                        du: mi * (pf.work_j + pf.heat_j),
-                        diss: mi * pf.heat_j,
-                        vsig: pf.vsig,
-                    },
-                )
-            },
+            InTwos(
+                |(xi, side_i, mi, _): &Prepared<D>, p: &Pair| {
+                    let j = p.j as usize;
+                    let dx: [f64; D] = std::array::from_fn(|d| xi[d] - local.pos[d][j]);
+                    let pf = force_pair(&dx, p.r, p.f, side_i, &side(j), av, terms);
+                    let [ci, cj] = ForceSum::of_pair(&pf, *mi, m[j]);
+                    (ci, cj)
+                },
+                // Two pairs in the lanes of one register: each arithmetic instruction
+                // serves both, the same operations as above lane by lane.
+                |(xi, _, mi, side_i): &Prepared<D>, p: &Pair, q: &Pair| {
+                    let (j, k) = (p.j as usize, q.j as usize);
+                    let dx: [F64x2; D] = std::array::from_fn(|d| {
+                        F64x2::splat(xi[d]) - F64x2::new(local.pos[d][j], local.pos[d][k])
+                    });
+                    let (r, f) = (F64x2::new(p.r, q.r), F64x2::new(p.f, q.f));
+                    let side_jk = ForceSide::zip(&side(j), &side(k));
+                    let pf = force_pair(&dx, r, f, side_i, &side_jk, av, terms);
+                    let [ci, cj] =
+                        ForceSum::of_pair(&pf, F64x2::splat(*mi), F64x2::new(m[j], m[k]));
+                    [(ci.lane(0), cj.lane(0)), (ci.lane(1), cj.lane(1))]
+                },
+            ),
             |wk, a: &ForceSum<D>| {
                 for d in 0..D {
                     wk.acc[d] += a.acc[d];
