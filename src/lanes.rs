@@ -113,8 +113,9 @@ impl Real for F64x2 {
     }
 }
 
+/// `$tr` (and `$atr`, the assigning form, where given) of `F64x2` as `imp::$imp`.
 macro_rules! lane_op {
-    ($tr:ident, $f:ident, $imp:ident, $atr:ident, $af:ident) => {
+    ($tr:ident, $f:ident, $imp:ident) => {
         impl $tr for F64x2 {
             type Output = Self;
             #[inline(always)]
@@ -122,6 +123,9 @@ macro_rules! lane_op {
                 Self(imp::$imp(self.0, o.0))
             }
         }
+    };
+    ($tr:ident, $f:ident, $imp:ident, $atr:ident, $af:ident) => {
+        lane_op!($tr, $f, $imp);
         impl $atr for F64x2 {
             #[inline(always)]
             fn $af(&mut self, o: Self) {
@@ -132,22 +136,8 @@ macro_rules! lane_op {
 }
 lane_op!(Add, add, add, AddAssign, add_assign);
 lane_op!(Sub, sub, sub, SubAssign, sub_assign);
-
-impl Mul for F64x2 {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        Self(imp::mul(self.0, o.0))
-    }
-}
-
-impl Div for F64x2 {
-    type Output = Self;
-    #[inline(always)]
-    fn div(self, o: Self) -> Self {
-        Self(imp::div(self.0, o.0))
-    }
-}
+lane_op!(Mul, mul, mul);
+lane_op!(Div, div, div);
 
 impl Neg for F64x2 {
     type Output = Self;

@@ -4,9 +4,9 @@
 //! Also the artificial conductivity of the energy equation (Price 2008), off by default, and
 //! the choice of a per-particle α (the Morris & Monaghan switch, `physics::av_switch`).
 
-use crate::lanes::Real;
 use serde::{Deserialize, Serialize};
 
+use crate::lanes::Real;
 use crate::physics::av_switch::{AvSwitch, SwitchKind};
 
 /// Π_ij = −α v_sig w_ij / (ρ_i + ρ_j) for approaching pairs (w_ij = v_ij·r̂_ij < 0), with

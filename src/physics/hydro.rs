@@ -57,24 +57,7 @@ pub struct ForceSide<const D: usize, T: Real = f64> {
 }
 
 impl<const D: usize> ForceSide<D> {
-    /// The same side in every lane of `T`.
-    #[inline(always)]
-    pub fn splat<T: Real>(&self) -> ForceSide<D, T> {
-        ForceSide {
-            v: self.v.map(T::splat),
-            v_av: self.v_av.map(T::splat),
-            rho: T::splat(self.rho),
-            rho_inv: T::splat(self.rho_inv),
-            p: T::splat(self.p),
-            cs: T::splat(self.cs),
-            av_scale: T::splat(self.av_scale),
-            stress: self.stress.map(|row| row.map(T::splat)),
-            u: T::splat(self.u),
-            y: T::splat(self.y),
-        }
-    }
-
-    /// `a` in lane 0, `b` in lane 1: two partners side by side.
+    /// `a` in lane 0, `b` in lane 1: two partners side by side (`zip(s, s)`: `s` in both).
     #[inline(always)]
     pub fn zip(a: &Self, b: &Self) -> ForceSide<D, F64x2> {
         let z = |x: f64, y: f64| F64x2::new(x, y);
@@ -337,7 +320,7 @@ mod tests {
             let f = r.map(|r| k.f(r));
             let dx2: [F64x2; 3] = std::array::from_fn(|d| F64x2::new(dx[0][d], dx[1][d]));
             let (r2, f2) = (F64x2::new(r[0], r[1]), F64x2::new(f[0], f[1]));
-            let (si, sj) = (i.splat::<F64x2>(), ForceSide::zip(&j0, &j1));
+            let (si, sj) = (ForceSide::zip(&i, &i), ForceSide::zip(&j0, &j1));
             for av in &avs {
                 for (viscous, pressure_energy) in
                     [(false, false), (true, false), (false, true), (true, true)]

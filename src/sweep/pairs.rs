@@ -939,7 +939,7 @@ impl PairBlock {
             |i| {
                 let x: [f64; D] = std::array::from_fn(|d| local.pos[d][i]);
                 let s = side(i);
-                (x, s, m[i], s.splat::<F64x2>())
+                (x, s, m[i], ForceSide::zip(&s, &s))
             },
             InTwos(
                 |(xi, side_i, mi, _): &Prepared<D>, p: &Pair| {
