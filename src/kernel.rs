@@ -9,6 +9,8 @@
 
 use std::f64::consts::PI;
 
+use crate::lanes::{F64x2, Real};
+
 use serde::{Deserialize, Serialize};
 
 /// Support radius of the cubic spline (the default kernel) in units of h.
@@ -176,6 +178,22 @@ impl<const D: usize> Kernel<D> {
         self.grad_norm * grad_shape_over_q::<D>(self.kind, q)
     }
 
+    /// W and F of two pairs at once: for the cubic spline in the two lanes of `F64x2`
+    /// (both pieces computed and one selected per lane, so no branch; the same bits as
+    /// [`Self::w_and_f`] on each), for the other kernels one after the other.
+    #[inline]
+    pub fn w_and_f_two(&self, r: [f64; 2]) -> [(f64, f64); 2] {
+        match self.kind {
+            KernelKind::Cubic => {
+                let q = F64x2::new(r[0], r[1]) / F64x2::splat(self.unit);
+                let w = F64x2::splat(self.norm) * cubic(q);
+                let f = F64x2::splat(self.grad_norm) * cubic_grad(q);
+                [(w.lane(0), f.lane(0)), (w.lane(1), f.lane(1))]
+            }
+            _ => r.map(|r| self.w_and_f(r)),
+        }
+    }
+
     /// Both W and F at once, as the sweep stores them with each pair.
     #[inline]
     pub fn w_and_f(&self, r: f64) -> (f64, f64) {
@@ -268,28 +286,42 @@ fn grad_shape_over_q<const D: usize>(kind: KernelKind, q: f64) -> f64 {
 
 /// Cubic spline: 1 − 3/2 q² + 3/4 q³ (q < 1), 1/4 (2 − q)³ (q < 2), 0 beyond.
 #[inline]
-fn cubic(q: f64) -> f64 {
-    if q < 1.0 {
-        1.0 - 1.5 * q * q + 0.75 * q * q * q
-    } else if q < 2.0 {
-        let t = 2.0 - q;
-        0.25 * t * t * t
-    } else {
-        0.0
-    }
+fn cubic<T: Real>(q: T) -> T {
+    let c = T::splat;
+    q.if_less(
+        1.0,
+        || c(1.0) - c(1.5) * q * q + c(0.75) * q * q * q,
+        || {
+            q.if_less(
+                2.0,
+                || {
+                    let t = c(2.0) - q;
+                    c(0.25) * t * t * t
+                },
+                || c(0.0),
+            )
+        },
+    )
 }
 
 /// (1/q) d(cubic)/dq: −3 + 9/4 q (q < 1), −3/4 (2 − q)²/q (q < 2), 0 beyond.
 #[inline]
-fn cubic_grad(q: f64) -> f64 {
-    if q < 1.0 {
-        -3.0 + 2.25 * q
-    } else if q < 2.0 {
-        let t = 2.0 - q;
-        -0.75 * t * t / q
-    } else {
-        0.0
-    }
+fn cubic_grad<T: Real>(q: T) -> T {
+    let c = T::splat;
+    q.if_less(
+        1.0,
+        || c(-3.0) + c(2.25) * q,
+        || {
+            q.if_less(
+                2.0,
+                || {
+                    let t = c(2.0) - q;
+                    c(-0.75) * t * t / q
+                },
+                || c(0.0),
+            )
+        },
+    )
 }
 
 /// Quintic spline: (3 − q)⁵ − 6 (2 − q)⁵ + 15 (1 − q)⁵, each term where its base is
@@ -431,6 +463,39 @@ mod tests {
         assert_eq!(k.f(k.support() * 1.01), 0.0);
         assert!(k.f(0.0).is_finite() && k.f(0.0) < 0.0);
         assert!(k.w(0.0) > k.w(0.1 * k.support()));
+    }
+
+    /// Pair finding takes the kernel two pairs at a time (`w_and_f_two`, the cubic spline
+    /// in SIMD lanes): each must be `w_and_f` of its distance to the bit, across both
+    /// pieces, at their joins q = 1 and q = 2 exactly, beyond the support and at r = 0.
+    fn check_two_at_once<const D: usize>(kind: KernelKind) {
+        let k = Kernel::<D>::of_kind(kind, 0.7);
+        let unit = k.support() / kind.support_factor();
+        let mut rs: Vec<f64> = (0..=500)
+            .map(|i| 1.1 * k.support() * i as f64 / 500.0)
+            .collect();
+        rs.extend([unit, 2.0 * unit, k.support(), f64::MIN_POSITIVE, 1e-300]);
+        for (n, a) in rs.iter().enumerate() {
+            let b = rs[(7 * n + 3) % rs.len()];
+            let two = k.w_and_f_two([*a, b]);
+            for (l, r) in [*a, b].into_iter().enumerate() {
+                let (w, f) = k.w_and_f(r);
+                assert_eq!(
+                    (two[l].0.to_bits(), two[l].1.to_bits()),
+                    (w.to_bits(), f.to_bits()),
+                    "{kind:?} {D}D lane {l}, r = {r}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn kernel_values_two_at_once_are_those_one_at_a_time_to_the_bit() {
+        for kind in KernelKind::ALL {
+            check_two_at_once::<1>(kind);
+            check_two_at_once::<2>(kind);
+            check_two_at_once::<3>(kind);
+        }
     }
 
     #[test]

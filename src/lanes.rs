@@ -3,7 +3,8 @@
 //!
 //! The physics of a pair ([`crate::physics::hydro::force_pair`]) is written once over
 //! [`Real`]; the force sum calls it with `F64x2` for its pairs two at a time, so that each
-//! arithmetic instruction serves two pairs. Every operation is IEEE 754 lane by lane, the
+//! arithmetic instruction serves two pairs, and pair finding so takes the cubic spline's W
+//! and F ([`crate::kernel::Kernel::w_and_f_two`]). Every operation is IEEE 754 lane by lane, the
 //! selections are masks that give what the scalar comparisons give (NaN included), and
 //! nothing is fused or reordered: lane `l` of a result is, to the bit, what the same code
 //! gives with `f64` on lane `l`'s inputs (the unit tests below and
@@ -35,6 +36,9 @@ pub trait Real:
     fn where_positive(self, a: Self) -> Self;
     /// `a` in the lanes where `self < 0`, +0 elsewhere (NaN: +0).
     fn where_negative(self, a: Self) -> Self;
+    /// `a()` in the lanes where `self < bound`, `b()` elsewhere (NaN: `b()`): for `f64` a
+    /// branch that evaluates one of them, with lanes both evaluated and selected by a mask.
+    fn if_less(self, bound: f64, a: impl FnOnce() -> Self, b: impl FnOnce() -> Self) -> Self;
 }
 
 impl Real for f64 {
@@ -62,6 +66,10 @@ impl Real for f64 {
     #[inline(always)]
     fn where_negative(self, a: Self) -> Self {
         if self < 0.0 { a } else { 0.0 }
+    }
+    #[inline(always)]
+    fn if_less(self, bound: f64, a: impl FnOnce() -> Self, b: impl FnOnce() -> Self) -> Self {
+        if self < bound { a() } else { b() }
     }
 }
 
@@ -110,6 +118,10 @@ impl Real for F64x2 {
     #[inline(always)]
     fn where_negative(self, a: Self) -> Self {
         Self(imp::where_lt0(self.0, a.0))
+    }
+    #[inline(always)]
+    fn if_less(self, bound: f64, a: impl FnOnce() -> Self, b: impl FnOnce() -> Self) -> Self {
+        Self(imp::select_lt(self.0, imp::new(bound, bound), a().0, b().0))
     }
 }
 
@@ -200,6 +212,15 @@ mod imp {
         // SAFETY: SSE2 (as above).
         unsafe { _mm_and_pd(_mm_cmplt_pd(c, _mm_setzero_pd()), a) }
     }
+    #[inline(always)]
+    pub fn select_lt(c: V, bound: V, a: V, b: V) -> V {
+        // The ordered comparison is false for NaN, as `c < bound` is; the blend moves bits.
+        // SAFETY: SSE2 (as above).
+        unsafe {
+            let m = _mm_cmplt_pd(c, bound);
+            _mm_or_pd(_mm_and_pd(m, a), _mm_andnot_pd(m, b))
+        }
+    }
 }
 
 /// Elsewhere: two plain lanes.
@@ -247,6 +268,13 @@ mod imp {
         [
             if c[0] < 0.0 { a[0] } else { 0.0 },
             if c[1] < 0.0 { a[1] } else { 0.0 },
+        ]
+    }
+    #[inline(always)]
+    pub fn select_lt(c: V, bound: V, a: V, b: V) -> V {
+        [
+            if c[0] < bound[0] { a[0] } else { b[0] },
+            if c[1] < bound[1] { a[1] } else { b[1] },
         ]
     }
 }
@@ -312,6 +340,33 @@ mod tests {
                     let mut s = x;
                     s -= y;
                     assert!(same(s.lane(0), a - b) && same(s.lane(1), b - c));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_comparison_selects_lane_by_lane_what_the_scalar_branch_takes() {
+        for &c in &VALUES {
+            for &bound in &VALUES {
+                for (&a, &b) in VALUES.iter().zip(VALUES.iter().rev()) {
+                    let x = F64x2::new(c, bound).if_less(
+                        bound,
+                        || F64x2::new(a, b),
+                        || F64x2::new(b, a),
+                    );
+                    let want = [
+                        c.if_less(bound, || a, || b),
+                        bound.if_less(bound, || b, || a),
+                    ];
+                    for l in 0..2 {
+                        assert!(
+                            same(x.lane(l), want[l]),
+                            "lane {l} of {c} < {bound}: {} against {}",
+                            x.lane(l),
+                            want[l]
+                        );
+                    }
                 }
             }
         }

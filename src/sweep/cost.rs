@@ -6,8 +6,8 @@
 //! **Flops:** each +, −, ×, ÷, √, min and max on per-pair data counts one, as the source
 //! writes it (a product computed once and reused counts once); negations, comparisons and
 //! operations on constants alone (−α, max(β, 1)) count none. Where a branch decides, the
-//! count is weighted: 1/2 of pairs approach (the artificial viscosity's Π ≠ 0), and 1/2^D of
-//! pairs lie within q < 1 of the cubic spline (uniform particles within the support 2h).
+//! count is weighted: 1/2 of pairs approach (the artificial viscosity's Π ≠ 0); the cubic
+//! spline's two pieces are both computed for every pair (in SIMD lanes, one selected).
 //!
 //! **Bytes:** what the pair loop loads or stores, wherever it comes from (registers aside):
 //! the [`Pair`] record; the second partner's fields the sum reads and its accumulator (read
@@ -145,10 +145,11 @@ pub fn find<const D: usize>(candidates_per_pair: f64, cells_per_pair: f64) -> Pa
     let listed = size_of::<u32>() + size_of::<f64>();
     let candidate_bytes =
         position::<D>() + field::<D, _>(|l| &l.class) + 2 * size_of::<f64>() + listed;
-    let inner = 0.5f64.powi(D as i32);
-    // q < 1: 1 − 1.5 q² + 0.75 q³ (5 ×, 2 ±) and −3 + 2.25 q (1 ×, 1 +);
-    // 1 ≤ q < 2: t = 2 − q, 0.25 t³ (1 −, 3 ×) and −0.75 t²/q (2 ×, 1 ÷).
-    let shape = inner * 9.0 + (1.0 - inner) * 7.0;
+    // Both pieces, for every pair (two pairs at a time in SIMD lanes, each lane selecting
+    // its piece: `Kernel::w_and_f_two`): q < 1: 1 − 1.5 q² + 0.75 q³ (5 ×, 2 ±) and
+    // −3 + 2.25 q (1 ×, 1 +); 1 ≤ q < 2: t = 2 − q, 0.25 t³ (1 −, 3 ×) and −0.75 t²/q
+    // (2 ×, 1 ÷).
+    let shape = 9.0 + 7.0;
     // √r², q = r/unit, the two normalisations.
     let pair_flops = 4.0 + shape;
     // The index and r² read back, r written and read, the record stored.
