@@ -3,12 +3,13 @@
 //!
 //! The physics of a pair ([`crate::physics::hydro::force_pair`]) is written once over
 //! [`Real`]; the force sum calls it with `F64x2` for its pairs two at a time, so that each
-//! arithmetic instruction serves two pairs, and pair finding so takes the cubic spline's W
-//! and F ([`crate::kernel::Kernel::w_and_f_two`]). Every operation is IEEE 754 lane by lane, the
-//! selections are masks that give what the scalar comparisons give (NaN included), and
-//! nothing is fused or reordered: lane `l` of a result is, to the bit, what the same code
-//! gives with `f64` on lane `l`'s inputs (the unit tests below and
-//! `force_pair_in_lanes_is_the_scalar_force_to_the_bit`).
+//! arithmetic instruction serves two pairs, and pair finding so takes the cubic spline's
+//! W and F ([`crate::kernel::Kernel::w_and_f_two`]). Every operation is IEEE 754 lane by
+//! lane, the selections are masks that give what the scalar comparisons give (NaN
+//! included), and nothing is fused or reordered: lane `l` of a result is, to the bit, what
+//! the same code gives with `f64` on lane `l`'s inputs (the unit tests below,
+//! `force_pair_in_lanes_is_the_scalar_force_to_the_bit` and
+//! `kernel_values_two_at_once_are_those_one_at_a_time_to_the_bit`).
 
 use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
 
