@@ -122,7 +122,7 @@ impl Real for F64x2 {
     }
     #[inline(always)]
     fn if_less(self, bound: f64, a: impl FnOnce() -> Self, b: impl FnOnce() -> Self) -> Self {
-        Self(imp::select_lt(self.0, imp::new(bound, bound), a().0, b().0))
+        Self(imp::select_lt(self.0, Self::splat(bound).0, a().0, b().0))
     }
 }
 

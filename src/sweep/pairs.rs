@@ -561,9 +561,9 @@ impl PairBlock {
                         f,
                     };
                     pairs.reserve(rs.len());
-                    let (r2s, j2s) = (rs.chunks_exact(2), js.chunks_exact(2));
-                    let (r_odd, j_odd) = (r2s.remainder(), j2s.remainder());
-                    for (r, j) in r2s.zip(j2s) {
+                    let (r_twos, j_twos) = (rs.chunks_exact(2), js.chunks_exact(2));
+                    let (r_odd, j_odd) = (r_twos.remainder(), j_twos.remainder());
+                    for (r, j) in r_twos.zip(j_twos) {
                         let [a, b] = kernel.w_and_f_two([r[0], r[1]]);
                         pairs.push(pair(j[0], r[0], a));
                         pairs.push(pair(j[1], r[1], b));
